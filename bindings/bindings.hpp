@@ -1,0 +1,8 @@
+// Declarations of the per-subsystem binding functions called from module.cpp.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace ernest::bindings {
+void bind_soil(pybind11::module_& m);
+}  // namespace ernest::bindings

@@ -1,0 +1,10 @@
+// ernest_cpp._core: one submodule per C++ subsystem, each bound in bindings/<subsystem>.cpp.
+#include <pybind11/pybind11.h>
+
+#include "bindings.hpp"
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "C++ core of ernest-cpp (soil, dynamics, optimisation). Use the ernest_cpp package.";
+  auto soil = m.def_submodule("soil", "Bekker–Wong soft soil and rigid contact (seed 004 §3.3–3.4)");
+  ernest::bindings::bind_soil(soil);
+}

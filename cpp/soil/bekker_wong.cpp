@@ -1,0 +1,217 @@
+// Bekker–Wong with the DARTS changes: seed 004 §3.3, eqs 12–32. Equation numbers in comments.
+#include "ernest/soil/bekker_wong.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "ernest/common/validation.hpp"
+
+namespace ernest::soil {
+
+namespace {
+
+using Arr = Eigen::Array<double, Eigen::Dynamic, 1, Eigen::ColMajor,
+                         BekkerWongModel::kMaxPointsPerPanel, 1>;
+
+// Gauss–Legendre nodes and weights on [-1, 1] by Newton iteration on P_n.
+void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
+  x.assign(n, 0.0);
+  w.assign(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    double z = std::cos(M_PI * (i + 0.75) / (n + 0.5));
+    double dp = 1.0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1.0, p1 = z;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      if (n == 1) p0 = 1.0;
+      dp = n * (z * p1 - p0) / (z * z - 1.0);
+      const double dz = p1 / dp;
+      z -= dz;
+      if (std::abs(dz) < 1e-15) break;
+    }
+    x[i] = z;
+    w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+  }
+}
+
+// Every angle of the model lies in [-pi/2, pi/2] (theta_f <= 90 deg since sinkage <= r), where
+// these Taylor polynomials are accurate to < 1e-11; unlike std::cos they vectorise.
+template <class A>
+Arr poly_cos(const A& t) {
+  const Arr t2 = t.square();
+  return 1.0 + t2 * (-1.0 / 2 + t2 * (1.0 / 24 + t2 * (-1.0 / 720 + t2 * (1.0 / 40320 +
+         t2 * (-1.0 / 3628800 + t2 * (1.0 / 479001600 + t2 * (-1.0 / 87178291200.0 +
+         t2 * (1.0 / 20922789888000.0))))))));
+}
+
+template <class A>
+Arr poly_sin(const A& t) {
+  const Arr t2 = t.square();
+  return t * (1.0 + t2 * (-1.0 / 6 + t2 * (1.0 / 120 + t2 * (-1.0 / 5040 + t2 * (1.0 / 362880 +
+         t2 * (-1.0 / 39916800 + t2 * (1.0 / 6227020800.0 + t2 * (-1.0 / 1307674368000.0 +
+         t2 * (1.0 / 355687428096000.0)))))))));
+}
+
+inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
+
+// Sums over the contact patch that eqs 30–32 and the axle torque are built from.
+struct Integrals {
+  double tau_cos = 0, sig_sin = 0, tau_sin = 0, sig_cos = 0, tau_y = 0, tau = 0;
+};
+
+}  // namespace
+
+void WheelGeometry::validate() const {
+  require_in_range("WheelGeometry", "radius", radius, 1e-3, 10.0);
+  require_in_range("WheelGeometry", "width", width, 1e-3, 10.0);
+}
+
+double slip_ratio(double vx, double vcx, double eps_slip) {
+  // eq 12: driving vs braking decided by the directions of v_cx and v_x, not by |r w| vs |v_x|;
+  // (1 - exp(-eps v_x^2)) takes s smoothly to 0 as longitudinal motion stops.
+  const double reg = -std::expm1(-eps_slip * vx * vx);
+  double s;
+  if (vcx * vx <= 0.0) {
+    const double den = vcx - vx;
+    s = den != 0.0 ? vcx / den * reg : 0.0;
+  } else {
+    s = -vcx / vx * reg;
+  }
+  return clamp_unit(s);
+}
+
+BekkerWongModel::BekkerWongModel(const SoilParameters& soil, const WheelGeometry& wheel,
+                                 int points_per_panel)
+    : soil_(soil), wheel_(wheel) {
+  soil_.validate();
+  wheel_.validate();
+  require_in_range("BekkerWongModel", "points_per_panel", points_per_panel, 1,
+                   kMaxPointsPerPanel);
+  gauss_legendre(points_per_panel, nodes_, weights_);
+  const double r = wheel_.radius, b = wheel_.width, n = soil_.sinkage_exponent;
+  k_eq_ = std::pow(r, n) * (soil_.k_c / b + soil_.k_phi);  // eq 17
+  require(k_eq_ > 0.0, "SoilParameters: k_c / b + k_phi must be > 0 for this wheel width");
+  const double phi = soil_.friction_angle;
+  tan_phi_ = std::tan(phi);
+  const double xc = M_PI / 4.0 - phi / 2.0;                  // eq 27
+  d1_ = 1.0 / std::tan(xc) + std::tan(xc + phi);             // eq 25
+  const double cot_xc = 1.0 / std::tan(xc);
+  d2_ = phi > 0.0 ? cot_xc + cot_xc * cot_xc * tan_phi_ : cot_xc;  // eq 26: cot^2 Xc / cot phi
+}
+
+WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
+  const char* o = "ContactState";
+  require_finite(o, "sinkage", st.sinkage);
+  require_finite(o, "vx", st.vx);
+  require_finite(o, "vy", st.vy);
+  require_finite(o, "vcx", st.vcx);
+  require_finite(o, "vcy", st.vcy);
+
+  const SoilParameters& p = soil_;
+  const double r = wheel_.radius, b = wheel_.width;
+  WheelSoilForce out;
+  const double s = slip_ratio(st.vx, st.vcx, p.eps_slip);  // eq 12
+  out.slip = s;
+  if (!(st.sinkage > 0.0)) return out;  // above the ground: no force
+
+  const double h = std::min(st.sinkage, r);
+  out.sinkage = h;
+  const double cos_tf = 1.0 - h / r;
+  const double tf = std::acos(cos_tf);  // eq 13
+  const double sin_tf = std::sin(tf);
+  // eq 16: t_rest -> 0 at full rest makes the stress distribution symmetric (no net F_x).
+  const double t_rest =
+      std::min((st.vx * st.vx + st.vcx * st.vcx) / (p.eps_motion * p.eps_motion), 1.0);
+  const double tm = t_rest * (p.a0 + p.a1 * s) * tf;                          // eq 14
+  const double tr = t_rest * (p.b0 + p.b1 * s) * tf + (t_rest - 1.0) * tf;    // eq 15
+  out.theta_f = tf;
+  out.theta_m = tm;
+  out.theta_r = tr;
+
+  // eqs 28–29: shear opposes the contact velocity, scaled to 0 below eps_contact.
+  const double sx = clamp_unit(-st.vcx / p.eps_contact_x);
+  const double sy = clamp_unit(-st.vcy / p.eps_contact_y);
+  // sign(v_x) of eqs 30 and 32, regularised (eps_direction, ours; 0 = the paper's sign).
+  const double sdir = p.eps_direction > 0.0 ? clamp_unit(st.vx / p.eps_direction)
+                                            : (st.vx > 0.0) - (st.vx < 0.0);
+  // Sideslip angle beta = atan(v_y / |v_x|) enters eq 22 only through tan(beta).
+  const double tan_beta = st.vy / std::max(std::abs(st.vx), 1e-12);
+  const double n = p.sinkage_exponent;
+  const double one_minus_s = 1.0 - s;
+  const double weight_density = p.density * p.gravity;  // rho g of Hegedus' eq 24
+
+  Integrals I;
+  const int np = static_cast<int>(nodes_.size());
+  const Eigen::Map<const Arr> xi(nodes_.data(), np);
+  const Eigen::Map<const Arr> wi(weights_.data(), np);
+  for (int panel = 0; panel < 2; ++panel) {
+    const bool rear = panel == 0;
+    const double lo = rear ? tr : tm, hi = rear ? tm : tf;
+    const double half = 0.5 * (hi - lo);
+    if (!(half > 0.0)) continue;
+    const Arr theta = 0.5 * (hi + lo) + half * xi;
+    const Arr w = half * wi;
+    const Arr c = poly_cos(theta), sn = poly_sin(theta);
+    Arr cos_eff;
+    if (rear) {  // eq 18: theta' maps [theta_r, theta_m] onto [theta_f, theta_m]
+      cos_eff = poly_cos(tf - (theta - tr) * ((tf - tm) / (tm - tr)));
+    } else {
+      cos_eff = c;
+    }
+    // eq 17, with (cos theta' - cos theta_f)^n written as exp(n log(.)) to vectorise.
+    const Arr base = (cos_eff - cos_tf).max(0.0);
+    const Arr sigma = k_eq_ * (n * base.max(1e-300).log()).exp() * (base > 0.0).cast<double>();
+    const Arr strength = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
+    // eqs 19 and 21 with |j_x| (the sign comes from eq 28).
+    const Arr jx = r * (tf - theta - one_minus_s * (sin_tf - sn));
+    const Arr tau_x = sx * strength * (1.0 - (-jx.abs() / p.shear_modulus_x).exp());
+    I.tau_cos += (w * tau_x * c).sum();
+    I.sig_sin += (w * sigma * sn).sum();
+    I.tau_sin += (w * tau_x * sn).sum();
+    I.sig_cos += (w * sigma * c).sum();
+    I.tau += (w * tau_x).sum();
+    if (sy != 0.0) {
+      // eqs 20 and 22, plus Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the
+      // reference point (theta = 0) to 0 at theta_f and theta_r.
+      const Arr jy = r * one_minus_s * (tf - theta) * tan_beta;
+      const Arr h_theta =
+          (theta >= 0.0).select(h * (tf - theta) / tf, h * (theta - tr) / std::max(-tr, 1e-300))
+              .max(0.0);
+      const Arr rb = d1_ * (p.cohesion * h_theta + d2_ * weight_density * h_theta.square() / 2.0);
+      const Arr fs = rb * (r - h_theta * c);
+      const Arr tau_y =
+          sy * (strength * (1.0 - (-jy.abs() / p.shear_modulus_y).exp()) + fs / (r * b));
+      I.tau_y += (w * tau_y).sum();
+    }
+  }
+  out.fx = r * b * (I.tau_cos - sdir * I.sig_sin);  // eq 30
+  out.fy = r * b * I.tau_y;                         // eq 31
+  out.fz = r * b * (sdir * I.tau_sin + I.sig_cos);  // eq 32
+  out.axle_torque = r * r * b * I.tau;
+  return out;
+}
+
+void BekkerWongModel::evaluate_batch(
+    const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 5, Eigen::RowMajor>>& states,
+    Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>> forces) const {
+  if (forces.rows() != states.rows()) {
+    throw std::invalid_argument("evaluate_batch: forces has " + std::to_string(forces.rows()) +
+                                " rows but states has " + std::to_string(states.rows()));
+  }
+  for (Eigen::Index i = 0; i < states.rows(); ++i) {
+    const WheelSoilForce f =
+        evaluate(ContactState{states(i, 0), states(i, 1), states(i, 2), states(i, 3), states(i, 4)});
+    forces(i, 0) = f.fx;
+    forces(i, 1) = f.fy;
+    forces(i, 2) = f.fz;
+    forces(i, 3) = f.axle_torque;
+  }
+}
+
+}  // namespace ernest::soil

@@ -1,0 +1,77 @@
+// Bekker–Wong wheel–soil contact with the DARTS modifications (seed 004 §3.3, eqs 12–32).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "ernest/soil/soil_parameters.hpp"
+
+namespace ernest::soil {
+
+/// Rigid cylindrical wheel of radius r and width b (ERNEST: Table 1, r = 0.17 m, b = 0.13 m).
+struct WheelGeometry {
+  double radius = 0.17;  ///< r [m]
+  double width = 0.13;   ///< b [m]
+  void validate() const;
+};
+
+/// Kinematic inputs in the contact frame of seed 004 Fig. 7: x forward (yawed with the wheel, not
+/// tilted), y lateral (along the axle), z up. Positive wheel spin rolls the wheel towards +x.
+struct ContactState {
+  double sinkage = 0.0;  ///< h: penetration of the reference contact point [m]; <= 0 means no contact
+  double vx = 0.0;       ///< longitudinal velocity of the wheel centre [m/s]
+  double vy = 0.0;       ///< lateral velocity of the wheel centre [m/s]
+  double vcx = 0.0;      ///< longitudinal velocity of the contact point w.r.t. the terrain [m/s]
+  double vcy = 0.0;      ///< lateral velocity of the contact point w.r.t. the terrain [m/s]
+};
+
+/// Forces on the wheel in the contact frame, applied at the contact patch, plus diagnostics.
+struct WheelSoilForce {
+  double fx = 0.0, fy = 0.0, fz = 0.0;  ///< eqs 30–32 [N]
+  /// r^2 b \int tau_x dtheta [N m]: the motor torque that balances the soil's shear about the axle
+  /// (the soil applies -axle_torque in the sense of positive wheel spin).
+  double axle_torque = 0.0;
+  double slip = 0.0;      ///< s of eq 12 (regularised, clamped to [-1, 1])
+  double theta_f = 0.0;   ///< entry angle, eq 13 [rad]
+  double theta_m = 0.0;   ///< angle of maximum normal stress, eq 14 [rad]
+  double theta_r = 0.0;   ///< exit angle, eq 15 [rad]
+  double sinkage = 0.0;   ///< sinkage used (clamped to [0, r]) [m]
+};
+
+/// Immutable, thread-safe evaluator: parameters are validated and derived constants and the
+/// Gauss–Legendre rule are computed once, so evaluate() never allocates.
+class BekkerWongModel {
+ public:
+  /// Default quadrature: Gauss–Legendre points per panel (two panels, [theta_r, theta_m] and
+  /// [theta_m, theta_f]); chosen by the convergence study in benchmarks/RESULTS.md.
+  static constexpr int kDefaultPointsPerPanel = 6;
+  static constexpr int kMaxPointsPerPanel = 64;
+
+  BekkerWongModel(const SoilParameters& soil, const WheelGeometry& wheel,
+                  int points_per_panel = kDefaultPointsPerPanel);
+
+  /// Forces for one wheel. Throws std::invalid_argument on a non-finite input. Sinkage above the
+  /// radius is clamped to r (theta_f = 90 deg): the model has no meaning past the axle.
+  WheelSoilForce evaluate(const ContactState& state) const;
+
+  /// Batch evaluation for the simulator's hot loop. `states` rows are
+  /// (sinkage, vx, vy, vcx, vcy); `forces` rows receive (fx, fy, fz, axle_torque).
+  void evaluate_batch(const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 5, Eigen::RowMajor>>& states,
+                      Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>> forces) const;
+
+  const SoilParameters& soil() const { return soil_; }
+  const WheelGeometry& wheel() const { return wheel_; }
+  int points_per_panel() const { return static_cast<int>(nodes_.size()); }
+
+ private:
+  SoilParameters soil_;
+  WheelGeometry wheel_;
+  std::vector<double> nodes_, weights_;  // Gauss–Legendre rule on [-1, 1]
+  double k_eq_;                          // r^n (k_c / b + k_phi), eq 17
+  double tan_phi_, d1_, d2_;             // eqs 25–27
+};
+
+/// Slip ratio of eq 12 (regularised, clamped to [-1, 1]); exposed for tests and the rig.
+double slip_ratio(double vx, double vcx, double eps_slip);
+
+}  // namespace ernest::soil

@@ -1,0 +1,9 @@
+"""ernest-cpp: open rover-mobility stack (ERNEST soil and dynamics, gait transitions, RL).
+
+Subpackages mirror the C++ tree: ``ernest_cpp.soil`` wraps ``cpp/soil``.
+"""
+
+from . import soil
+
+__all__ = ["soil"]
+__version__ = "0.1.0"

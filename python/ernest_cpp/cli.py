@@ -1,0 +1,28 @@
+"""The ``ernest`` console command. Each subsystem registers its subcommands here."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from . import soil_curves
+
+# Each module exposes add_parser(subparsers) and sets `func` on its parser.
+_COMMANDS = [soil_curves]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="ernest", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    for module in _COMMANDS:
+        module.add_parser(sub)
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except ValueError as exc:  # bad user input: one clear line, no traceback
+        print(f"ernest {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
