@@ -6,39 +6,16 @@
 #include <stdexcept>
 #include <string>
 
+#include "ernest/common/quadrature.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::soil {
 
 namespace {
 
+// Nodes of up to four panels (three kinks) in one fixed-capacity array: no heap allocation.
 using Arr = Eigen::Array<double, Eigen::Dynamic, 1, Eigen::ColMajor,
-                         BekkerWongModel::kMaxPointsPerPanel, 1>;
-
-// Gauss–Legendre nodes and weights on [-1, 1] by Newton iteration on P_n.
-void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
-  x.assign(n, 0.0);
-  w.assign(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    double z = std::cos(M_PI * (i + 0.75) / (n + 0.5));
-    double dp = 1.0;
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1.0, p1 = z;
-      for (int k = 2; k <= n; ++k) {
-        const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
-        p0 = p1;
-        p1 = p2;
-      }
-      if (n == 1) p0 = 1.0;
-      dp = n * (z * p1 - p0) / (z * z - 1.0);
-      const double dz = p1 / dp;
-      z -= dz;
-      if (std::abs(dz) < 1e-15) break;
-    }
-    x[i] = z;
-    w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-  }
-}
+                         4 * BekkerWongModel::kMaxPointsPerPanel, 1>;
 
 // Every angle of the model lies in [-pi/2, pi/2] (theta_f <= 90 deg since sinkage <= r), where
 // these Taylor polynomials are accurate to < 1e-11; unlike std::cos they vectorise.
@@ -59,6 +36,33 @@ Arr poly_sin(const A& t) {
 }
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
+
+// For a braking wheel (s < 0) j_x of eq 21 can change sign inside the contact patch, and |j_x|
+// in eq 19 then has a kink that Gauss–Legendre handles poorly (~1% error at 4 points). With
+// g(t) = t_f - t - (1 - s)(sin t_f - sin t): g' = (1 - s) cos t - 1 > 0 on (-t_c, t_c),
+// t_c = acos(1 / (1 - s)), and g > 0 on [t_c, t_f); so there is at most one interior root,
+// bracketed in (max(t_r, -t_c), t_c) where g is increasing. Returns NaN if there is none.
+double jx_sign_change(double tf, double tr, double s) {
+  const double k = 1.0 - s;
+  if (s >= 0.0) return std::nan("");
+  const double tc = std::acos(1.0 / k);
+  if (tf <= tc) return std::nan("");
+  auto g = [&](double t) { return tf - t - k * (std::sin(tf) - std::sin(t)); };
+  double lo = std::max(tr, -tc), hi = tc;
+  if (g(lo) >= 0.0) return std::nan("");
+  double t = 0.5 * (lo + hi);
+  for (int it = 0; it < 30; ++it) {  // safeguarded Newton: stays inside the shrinking bracket
+    const double gt = g(t);
+    (gt < 0.0 ? lo : hi) = t;
+    if (hi - lo < 1e-12) break;
+    const double step = gt / (k * std::cos(t) - 1.0);
+    double next = t - step;
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (std::abs(next - t) < 1e-13) { t = next; break; }
+    t = next;
+  }
+  return t;
+}
 
 // Sums over the contact patch that eqs 30–32 and the axle torque are built from.
 struct Integrals {
@@ -93,7 +97,7 @@ BekkerWongModel::BekkerWongModel(const SoilParameters& soil, const WheelGeometry
   wheel_.validate();
   require_in_range("BekkerWongModel", "points_per_panel", points_per_panel, 1,
                    kMaxPointsPerPanel);
-  gauss_legendre(points_per_panel, nodes_, weights_);
+  ernest::gauss_legendre(points_per_panel, nodes_, weights_);
   const double r = wheel_.radius, b = wheel_.width, n = soil_.sinkage_exponent;
   k_eq_ = std::pow(r, n) * (soil_.k_c / b + soil_.k_phi);  // eq 17
   require(k_eq_ > 0.0, "SoilParameters: k_c / b + k_phi must be > 0 for this wheel width");
@@ -146,53 +150,69 @@ WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
   const double one_minus_s = 1.0 - s;
   const double weight_density = p.density * p.gravity;  // rho g of Hegedus' eq 24
 
-  Integrals I;
+  // Gauss–Legendre panels split where the integrands have kinks: theta = 0 (the bulldozing depth
+  // profile of eq 23 peaks there), theta_m (the theta' mapping of eq 18) and, when braking, the
+  // sign change of j_x (eqs 19, 21). All panels' nodes go into one array so that each integrand
+  // below is a single vectorised pass.
+  double cuts[5] = {tr, 0.0, tm, tf, tf};
+  int ncuts = 4;
+  const double kink = jx_sign_change(tf, tr, s);
+  if (kink > tr && kink < tf) {
+    cuts[ncuts++] = kink;
+    std::sort(cuts, cuts + ncuts);
+  }
   const int np = static_cast<int>(nodes_.size());
-  const Eigen::Map<const Arr> xi(nodes_.data(), np);
-  const Eigen::Map<const Arr> wi(weights_.data(), np);
-  for (int panel = 0; panel < 2; ++panel) {
-    const bool rear = panel == 0;
-    const double lo = rear ? tr : tm, hi = rear ? tm : tf;
-    const double half = 0.5 * (hi - lo);
-    if (!(half > 0.0)) continue;
-    const Arr theta = 0.5 * (hi + lo) + half * xi;
-    const Arr w = half * wi;
-    const Arr c = poly_cos(theta), sn = poly_sin(theta);
-    Arr cos_eff;
-    if (rear) {  // eq 18: theta' maps [theta_r, theta_m] onto [theta_f, theta_m]
-      cos_eff = poly_cos(tf - (theta - tr) * ((tf - tm) / (tm - tr)));
-    } else {
-      cos_eff = c;
+  Arr theta(np * (ncuts - 1)), w(np * (ncuts - 1));
+  int m = 0;
+  for (int panel = 0; panel + 1 < ncuts; ++panel) {
+    const double lo = cuts[panel], hi = cuts[panel + 1];
+    if (!(hi > lo)) continue;
+    const double half = 0.5 * (hi - lo), mid = 0.5 * (hi + lo);
+    for (int k = 0; k < np; ++k, ++m) {
+      theta[m] = mid + half * nodes_[k];
+      w[m] = half * weights_[k];
     }
-    // eq 17, with (cos theta' - cos theta_f)^n written as exp(n log(.)) to vectorise.
-    const Arr base = (cos_eff - cos_tf).max(0.0);
-    const Arr sigma = k_eq_ * (n * base.max(1e-300).log()).exp() * (base > 0.0).cast<double>();
-    const Arr strength = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
-    // eqs 19 and 21 with |j_x| (the sign comes from eq 28).
-    const Arr jx = r * (tf - theta - one_minus_s * (sin_tf - sn));
-    const Arr tau_x = sx * strength * (1.0 - (-jx.abs() / p.shear_modulus_x).exp());
-    I.tau_cos += (w * tau_x * c).sum();
-    I.sig_sin += (w * sigma * sn).sum();
-    I.tau_sin += (w * tau_x * sn).sum();
-    I.sig_cos += (w * sigma * c).sum();
-    I.tau += (w * tau_x).sum();
-    if (sy != 0.0) {
-      // eqs 20 and 22, plus Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the
-      // reference point (theta = 0) to 0 at theta_f and theta_r.
-      const Arr jy = r * one_minus_s * (tf - theta) * tan_beta;
-      const Arr h_theta =
-          (theta >= 0.0).select(h * (tf - theta) / tf, h * (theta - tr) / std::max(-tr, 1e-300))
-              .max(0.0);
-      const Arr rb = d1_ * (p.cohesion * h_theta + d2_ * weight_density * h_theta.square() / 2.0);
-      const Arr fs = rb * (r - h_theta * c);
-      const Arr tau_y =
-          sy * (strength * (1.0 - (-jy.abs() / p.shear_modulus_y).exp()) + fs / (r * b));
-      I.tau_y += (w * tau_y).sum();
-    }
+  }
+  if (m == 0) return out;
+  theta.conservativeResize(m);
+  w.conservativeResize(m);
+
+  const Arr c = poly_cos(theta), sn = poly_sin(theta);
+  // eq 18: theta' maps [theta_r, theta_m] onto [theta_f, theta_m]; theta' = theta in front.
+  const Arr cos_eff =
+      (theta < tm).select(poly_cos(tf - (theta - tr) * ((tf - tm) / (tm - tr))), c);
+  // eq 17, with (cos theta' - cos theta_f)^n written as exp(n log(.)) to vectorise.
+  const Arr base = (cos_eff - cos_tf).max(1e-300);
+  const Arr sigma = k_eq_ * (n * base.log()).exp() * (cos_eff > cos_tf).cast<double>();
+  const Arr strength = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
+  // eqs 19 and 21 with |j_x| (the sign comes from eq 28).
+  const Arr jx = r * (tf - theta - one_minus_s * (sin_tf - sn));
+  const Arr tau_x = sx * strength * (1.0 - (-jx.abs() / p.shear_modulus_x).exp());
+  const Arr w_tau = w * tau_x, w_sig = w * sigma;
+  Integrals I;
+  I.tau_cos = (w_tau * c).sum();
+  I.sig_sin = (w_sig * sn).sum();
+  I.tau_sin = (w_tau * sn).sum();
+  I.sig_cos = (w_sig * c).sum();
+  I.tau = w_tau.sum();
+  if (sy != 0.0) {
+    // eqs 20 and 22, plus Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the
+    // reference point (theta = 0) to 0 at theta_r and theta_f.
+    const Arr jy = r * one_minus_s * (tf - theta) * tan_beta;
+    const Arr h_theta =
+        (theta < 0.0).select(h * (theta - tr) / std::max(-tr, 1e-300), h * (tf - theta) / tf)
+            .max(0.0);
+    const Arr rb = d1_ * (p.cohesion * h_theta + d2_ * weight_density * h_theta.square() / 2.0);
+    const Arr fs = rb * (r - h_theta * c);
+    const Arr tau_y = strength * (1.0 - (-jy.abs() / p.shear_modulus_y).exp()) + fs / (r * b);
+    I.tau_y = sy * (w * tau_y).sum();
   }
   out.fx = r * b * (I.tau_cos - sdir * I.sig_sin);  // eq 30
   out.fy = r * b * I.tau_y;                         // eq 31
-  out.fz = r * b * (sdir * I.tau_sin + I.sig_cos);  // eq 32
+  // eq 32, floored at 0: for a braking wheel at a few mm of sinkage in soft soil (n = 1.9) the
+  // cohesive shear of eq 19 can outweigh the near-zero normal stress and make the sum slightly
+  // negative (~ -0.03 N); the soil cannot pull a wheel into the ground.
+  out.fz = std::max(0.0, r * b * (sdir * I.tau_sin + I.sig_cos));
   out.axle_torque = r * r * b * I.tau;
   return out;
 }

@@ -27,7 +27,7 @@ struct ContactState {
 
 /// Forces on the wheel in the contact frame, applied at the contact patch, plus diagnostics.
 struct WheelSoilForce {
-  double fx = 0.0, fy = 0.0, fz = 0.0;  ///< eqs 30–32 [N]
+  double fx = 0.0, fy = 0.0, fz = 0.0;  ///< eqs 30–32 [N]; fz floored at 0 (see the .cpp)
   /// r^2 b \int tau_x dtheta [N m]: the motor torque that balances the soil's shear about the axle
   /// (the soil applies -axle_torque in the sense of positive wheel spin).
   double axle_torque = 0.0;
@@ -42,10 +42,10 @@ struct WheelSoilForce {
 /// Gauss–Legendre rule are computed once, so evaluate() never allocates.
 class BekkerWongModel {
  public:
-  /// Default quadrature: Gauss–Legendre points per panel (two panels, [theta_r, theta_m] and
+  /// Default quadrature: Gauss–Legendre points per panel (three panels, [theta_r, 0], [0, theta_m],
   /// [theta_m, theta_f]); chosen by the convergence study in benchmarks/RESULTS.md.
-  static constexpr int kDefaultPointsPerPanel = 6;
-  static constexpr int kMaxPointsPerPanel = 64;
+  static constexpr int kDefaultPointsPerPanel = 4;
+  static constexpr int kMaxPointsPerPanel = 32;
 
   BekkerWongModel(const SoilParameters& soil, const WheelGeometry& wheel,
                   int points_per_panel = kDefaultPointsPerPanel);
