@@ -7,4 +7,6 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "C++ core of ernest-cpp (soil, dynamics, optimisation). Use the ernest_cpp package.";
   auto soil = m.def_submodule("soil", "Bekker–Wong soft soil and rigid contact (seed 004 §3.3–3.4)");
   ernest::bindings::bind_soil(soil);
+  auto opt = m.def_submodule("opt", "Asterix gait transitions with NLopt SLSQP (seed 000)");
+  ernest::bindings::bind_opt(opt);
 }

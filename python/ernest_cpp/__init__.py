@@ -3,7 +3,7 @@
 Subpackages mirror the C++ tree: ``ernest_cpp.soil`` wraps ``cpp/soil``.
 """
 
-from . import soil
+from . import opt, soil
 
-__all__ = ["soil"]
+__all__ = ["opt", "soil"]
 __version__ = "0.1.0"

@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import soil_curves
+from . import soil_curves, transitions
 
 # Each module exposes add_parser(subparsers) and sets `func` on its parser.
-_COMMANDS = [soil_curves]
+_COMMANDS = [soil_curves, transitions]
 
 
 def main(argv: list[str] | None = None) -> int:

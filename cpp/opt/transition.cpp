@@ -1,0 +1,703 @@
+#include "ernest/opt/transition.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <nlopt.h>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "ernest/common/validation.hpp"
+#include "ernest/opt/ode.hpp"
+
+namespace ernest::opt {
+
+// ---------------------------------------------------------------------------------------------
+// Names, weights, options, problem
+
+std::string to_string(Strategy s) {
+  switch (s) {
+    case Strategy::Naive: return "naive";
+    case Strategy::Bezier: return "bezier";
+    case Strategy::Linear: return "linear";
+    case Strategy::Spline: return "spline";
+  }
+  return "unknown";
+}
+
+std::string to_string(WeightSet w) {
+  switch (w) {
+    case WeightSet::Duration: return "duration";
+    case WeightSet::Deviation: return "deviation";
+    case WeightSet::Balanced: return "balanced";
+  }
+  return "unknown";
+}
+
+Strategy strategy_from_string(const std::string& name) {
+  for (Strategy s : {Strategy::Naive, Strategy::Bezier, Strategy::Linear, Strategy::Spline})
+    if (to_string(s) == name) return s;
+  throw std::invalid_argument("unknown strategy '" + name + "'; allowed: naive, bezier, linear, spline");
+}
+
+WeightSet weight_set_from_string(const std::string& name) {
+  for (WeightSet w : {WeightSet::Duration, WeightSet::Deviation, WeightSet::Balanced})
+    if (to_string(w) == name) return w;
+  throw std::invalid_argument("unknown weight set '" + name +
+                              "'; allowed: duration, deviation, balanced");
+}
+
+void CostWeights::validate() const {
+  require_in_range("CostWeights", "duration", duration, 0.0, 1e6);
+  require_in_range("CostWeights", "acceleration", acceleration, 0.0, 1e6);
+  require_in_range("CostWeights", "deviation", deviation, 0.0, 1e6);
+  require_in_range("CostWeights", "linear", linear, 0.0, 1e6);
+}
+
+CostWeights CostWeights::table1(Strategy strategy, WeightSet set) {
+  // Table 1 of seed 000: w1 (duration), w2 (acceleration), w3 (workspace deviation).
+  CostWeights w;
+  if (strategy == Strategy::Bezier) {
+    if (set == WeightSet::Duration) w = {30.0, 1.0, 1.0, 1.0};
+    if (set == WeightSet::Deviation) w = {1.0, 1.0, 20.0, 1.0};
+    if (set == WeightSet::Balanced) w = {5.0, 1.0, 1.0, 1.0};
+  } else if (strategy == Strategy::Linear || strategy == Strategy::Spline) {
+    if (set == WeightSet::Duration) w = {20.0, 5.0, 1.0, 1.0};
+    if (set == WeightSet::Deviation) w = {4.0, 5.0, 20.0, 1.0};
+    if (set == WeightSet::Balanced) w = {4.0, 5.0, 1.0, 1.0};
+  }
+  return w;
+}
+
+void TransitionOptions::validate() const {
+  solver.validate();
+  constexpr const char* o = "TransitionOptions";
+  require_in_range(o, "waypoints", waypoints, 3, 2000);
+  require_in_range(o, "constraint_samples", constraint_samples, 1, 1000);
+  require_in_range(o, "min_duration", min_duration, 1e-3, 1e4);
+  require_in_range(o, "max_duration", max_duration, min_duration, 1e4);
+  require_positive(o, "duration_scale", duration_scale);
+  require_positive(o, "acceleration_scale", acceleration_scale);
+  require_positive(o, "position_scale", position_scale);
+  require_positive(o, "heading_scale", heading_scale);
+  require_positive(o, "linear_scale", linear_scale);
+  require_in_range(o, "initial_durations", initial_durations, 1, 1000);
+  require_in_range(o, "initial_phases", initial_phases, 1, 1000);
+  require_in_range(o, "feasibility_tol", feasibility_tol, 0.0, 1.0);
+  integration.validate();
+}
+
+TransitionProblem::TransitionProblem(const AsterixParameters& rover_, Gait from_, Gait to_,
+                                     double t1_)
+    : rover(rover_), from(std::move(from_)), to(std::move(to_)), t1(t1_) {
+  require(from.joints() == kAsterixJoints,
+          "TransitionProblem: limits from the rover need two-joint gaits (steering, roll)");
+  position_limit = rover.position_limit();
+  velocity_limit = rover.velocity_limit();
+  acceleration_limit = rover.acceleration_limit();
+  validate();
+}
+
+TransitionProblem::TransitionProblem(const AsterixParameters& rover_, Gait from_, Gait to_,
+                                     double t1_, Eigen::VectorXd position_limit_,
+                                     Eigen::VectorXd velocity_limit_,
+                                     Eigen::VectorXd acceleration_limit_)
+    : rover(rover_),
+      from(std::move(from_)),
+      to(std::move(to_)),
+      t1(t1_),
+      position_limit(std::move(position_limit_)),
+      velocity_limit(std::move(velocity_limit_)),
+      acceleration_limit(std::move(acceleration_limit_)) {
+  validate();
+}
+
+void TransitionProblem::validate() const {
+  rover.validate();
+  require_finite("TransitionProblem", "t1", t1);
+  const int n = from.joints();
+  require(to.joints() == n, "TransitionProblem: both gaits need the same number of joints");
+  require(position_limit.size() == n && velocity_limit.size() == n &&
+              acceleration_limit.size() == n,
+          "TransitionProblem: limits need one entry per joint");
+  for (int j = 0; j < n; ++j) {
+    require_positive("TransitionProblem", "position_limit", position_limit[j]);
+    require_positive("TransitionProblem", "velocity_limit", velocity_limit[j]);
+    require_positive("TransitionProblem", "acceleration_limit", acceleration_limit[j]);
+  }
+  // The steering joint enters tan(theta/2) (eq 22): keep it well inside +-pi.
+  require(position_limit[kSteering] < 2.5,
+          "TransitionProblem: position_limit[0] (steering) must be < 2.5 rad");
+  from.check_limits(position_limit, velocity_limit);
+  to.check_limits(position_limit, velocity_limit);
+}
+
+int TransitionResult::joints() const {
+  return strategy == Strategy::Naive ? trapezoid.joints() : spline.joints();
+}
+
+void TransitionResult::evaluate(int j, double tau, double& q, double& dq, double& ddq) const {
+  if (strategy == Strategy::Naive)
+    trapezoid.evaluate(j, tau, q, dq, ddq);
+  else
+    spline.evaluate(j, tau, q, dq, ddq);
+}
+
+void TransitionResult::executed(const TransitionProblem& problem, int j, double t, double& q,
+                                double& dq, double& ddq) const {
+  if (t < t1)
+    problem.from.evaluate(j, t, q, dq, ddq);
+  else if (t > t1 + duration)
+    problem.to.evaluate(j, t - phase_shift, q, dq, ddq);  // g2(t - phi), eq 3
+  else
+    evaluate(j, t - t1, q, dq, ddq);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Naive
+
+TransitionResult naive_transition(const TransitionProblem& problem) {
+  problem.validate();
+  const auto start = std::chrono::steady_clock::now();
+  TransitionResult r;
+  r.requested = r.strategy = Strategy::Naive;
+  r.t1 = problem.t1;
+  r.trapezoid = TrapezoidTrajectory(problem.from.position(problem.t1), problem.to.position(0.0),
+                                    problem.velocity_limit, problem.acceleration_limit);
+  r.duration = r.trapezoid.duration();
+  // Continue with g2 from phase 0: g2(t - phi) at t = t1 + T is g2(0), so phi = t1 + T.
+  r.phase_shift = problem.t1 + r.duration;
+  r.end_phase = 0.0;
+  r.solver.status_name = "NOT_OPTIMISED";
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Optimised strategies
+
+namespace {
+
+// Decision vector x = [T, sigma, interior waypoints joint-major], sigma = t1 + T - phi (the end
+// phase of g2). With two waypoints (Bezier) x = [T, sigma] and the curve is eqs 9–13:
+//   p0 = g1(t1), p3 = g2(sigma), p1 = p0 + (T/3) g1'(t1), p2 = p3 - (T/3) g2'(sigma).
+// Eq 9 as printed has an exponent typo in its third term: the cubic Bernstein basis is
+// 3 (1-s) s^2, not 3 (1-s)^3 s^2. Eqs 11–12 print 1/(3T): with q(t) = B(s), s = (t - t1)/T,
+// dq/dt(t1) = B'(0)/T = 3 (p1 - p0)/T, so matching the gait velocity (eq 4) needs
+// p1 - p0 = (T/3) g1'(t1) — the dimensions of 1/(3T) (rad s^-2) cannot even be a joint angle.
+class TransitionCost {
+ public:
+  TransitionCost(const TransitionProblem& pb, Strategy strategy, const CostWeights& w,
+                 const TransitionOptions& o, int waypoints)
+      : pb_(pb), kin_(pb.rover), strategy_(strategy), w_(w), o_(o), nj_(pb.joints()),
+        n_(waypoints), ds_(1.0 / (waypoints - 1)) {
+    dim_ = 2 + nj_ * (n_ - 2);
+    W_ = Eigen::MatrixXd::Zero(nj_, n_);
+    gW_ = Eigen::MatrixXd::Zero(nj_, n_);
+    m0_ = m1_ = v1_ = g2v_ = g2a_ = gm0_ = gm1_ = Eigen::VectorXd::Zero(nj_);
+    for (int j = 0; j < nj_; ++j) {
+      double q, dq, ddq;
+      pb.from.evaluate(j, pb.t1, q, dq, ddq);
+      W_(j, 0) = q;
+      v1_[j] = dq;
+    }
+    seg_.resize(2 * (n_ - 1));
+    for (int k = 0; k < n_ - 1; ++k) {
+      spline_stencil(n_, k, 0.0, seg_[2 * k]);
+      spline_stencil(n_, k, 1.0, seg_[2 * k + 1]);
+    }
+    if (strategy_ == Strategy::Bezier) {
+      const int K = o.constraint_samples;
+      samples_.resize(K);
+      for (int k = 0; k < K; ++k) spline_stencil_at(n_, (k + 1.0) / (K + 1.0), samples_[k]);
+      m_ = 4 * nj_ * K;
+    } else {
+      m_ = 2 * nj_ * (n_ - 1);
+    }
+    const int P = n_ + 3;
+    y_.assign(3 + 3 * P, 0.0);
+  }
+
+  int dimension() const { return dim_; }
+  int constraint_count() const { return m_; }
+  int index(int j, int i) const { return 2 + j * (n_ - 2) + (i - 1); }
+
+  // x from (T, sigma) with the interior waypoints on the two-point Bezier through the gaits.
+  std::vector<double> bezier_guess(double T, double sigma) {
+    std::vector<double> x(dim_, 0.0);
+    x[0] = T;
+    x[1] = sigma;
+    SplineStencil st;
+    for (int j = 0; j < nj_; ++j) {
+      double q2, v2, a2;
+      pb_.to.evaluate(j, sigma, q2, v2, a2);
+      for (int i = 1; i < n_ - 1; ++i) {
+        spline_stencil(2, 0, i * ds_, st);
+        x[index(j, i)] = st.w[0][1] * W_(j, 0) + st.w[0][2] * q2 +
+                         st.start_tangent[0] * T * v1_[j] + st.end_tangent[0] * T * v2;
+      }
+    }
+    return x;
+  }
+
+  void unpack(const double* x) {
+    T_ = x[0];
+    sigma_ = x[1];
+    for (int j = 0; j < nj_; ++j) {
+      double q, dq, ddq;
+      pb_.to.evaluate(j, sigma_, q, dq, ddq);
+      W_(j, n_ - 1) = q;
+      g2v_[j] = dq;
+      g2a_[j] = ddq;
+      m0_[j] = T_ * v1_[j];
+      m1_[j] = T_ * dq;
+      for (int i = 1; i < n_ - 1; ++i) W_(j, i) = x[index(j, i)];
+    }
+  }
+
+  double value(const SplineStencil& st, int d, int j) const {
+    double acc = st.start_tangent[d] * m0_[j] + st.end_tangent[d] * m1_[j];
+    for (int i = 0; i < 4; ++i) {
+      const int idx = st.first + i;
+      if (idx >= 0 && idx < n_) acc += st.w[d][i] * W_(j, idx);
+    }
+    return acc;
+  }
+
+  void add_grad(const SplineStencil& st, int d, int j, double g) {
+    gm0_[j] += g * st.start_tangent[d];
+    gm1_[j] += g * st.end_tangent[d];
+    for (int i = 0; i < 4; ++i) {
+      const int idx = st.first + i;
+      if (idx >= 0 && idx < n_) gW_(j, idx) += g * st.w[d][i];
+    }
+  }
+
+  void clear_grad() {
+    gW_.setZero();
+    gm0_.setZero();
+    gm1_.setZero();
+    gT_ = gSigma_ = 0.0;
+  }
+
+  // Chain rule from the sources (waypoints, end tangents, explicit T and sigma) to x.
+  void chain(double* grad) const {
+    double gT = gT_, gS = gSigma_;
+    for (int j = 0; j < nj_; ++j) {
+      gT += gm0_[j] * v1_[j] + gm1_[j] * g2v_[j];                   // m0 = T g1', m1 = T g2'
+      gS += gW_(j, n_ - 1) * g2v_[j] + gm1_[j] * T_ * g2a_[j];     // W_{N-1} = g2(sigma)
+      for (int i = 1; i < n_ - 1; ++i) grad[index(j, i)] = gW_(j, i);
+    }
+    grad[0] = gT;
+    grad[1] = gS;
+  }
+
+  // Relative pose of the transition end w.r.t. its start, with sensitivities (dim 3 x (N+3):
+  // explicit T, m0, m1, W_0..W_{N-1} of the steering joint) when `sens`.
+  void integrate_transition(bool sens) {
+    const int P = n_ + 3;
+    const std::size_t size = sens ? 3 + 3 * P : 3;
+    std::vector<double>& y = y_;
+    y.assign(size, 0.0);
+    const double V = pb_.rover.forward_speed, l = pb_.rover.l_x;
+    auto rhs = [&](const std::vector<double>& s, std::vector<double>& dy, double t) {
+      SplineStencil st;
+      spline_stencil_at(n_, t, st);
+      const double th = value(st, 0, kSteering), thp = value(st, 1, kSteering);
+      const double h = 0.5 * th, tn = std::tan(h), sh = std::sin(h), ch = std::cos(h);
+      const double psi = s[2], c = std::cos(psi), sn = std::sin(psi);
+      // Reference-point velocity (asterix_model.hpp) in normalised time: d/ds = T d/dt.
+      const double F = T_ * V * ch, L = 0.5 * l * thp * tn * sh;
+      const double dX = F * c - L * sn, dY = F * sn + L * c;
+      dy[0] = dX;
+      dy[1] = dY;
+      dy[2] = -T_ * V / l * tn;  // eq 22 averaged
+      if (!sens) return;
+      const double sec2 = 1.0 + tn * tn;
+      const double dpsi_dth = -0.5 * T_ * V / l * sec2;
+      const double dF_dth = -0.5 * T_ * V * sh;
+      const double dL_dth = 0.25 * l * thp * sh * (sec2 + 1.0);
+      const double dL_dthp = 0.5 * l * tn * sh;
+      for (int p = 0; p < P; ++p) {
+        const double spsi = s[3 + 3 * p + 2];
+        dy[3 + 3 * p + 0] = -dY * spsi;  // dX'/dpsi = -Y'
+        dy[3 + 3 * p + 1] = dX * spsi;   // dY'/dpsi = X'
+        dy[3 + 3 * p + 2] = 0.0;
+      }
+      auto add = [&](int p, double dth, double dthp) {
+        const double dF = dF_dth * dth, dL = dL_dth * dth + dL_dthp * dthp;
+        dy[3 + 3 * p + 0] += dF * c - dL * sn;
+        dy[3 + 3 * p + 1] += dF * sn + dL * c;
+        dy[3 + 3 * p + 2] += dpsi_dth * dth;
+      };
+      // Explicit T (the V_r terms).
+      dy[3 + 0] += V * ch * c;
+      dy[3 + 1] += V * ch * sn;
+      dy[3 + 2] += -V / l * tn;
+      add(1, st.start_tangent[0], st.start_tangent[1]);
+      add(2, st.end_tangent[0], st.end_tangent[1]);
+      for (int i = 0; i < 4; ++i) {
+        const int idx = st.first + i;
+        if (idx >= 0 && idx < n_) add(3 + idx, st.w[0][i], st.w[1][i]);
+      }
+    };
+    detail::integrate_checked(rhs, y, 0.0, 1.0, o_.integration, "transition kinematics", n_ - 1);
+  }
+
+  double objective(const double* x, double* grad) {
+    unpack(x);
+    if (grad) clear_grad();
+    const bool g = grad != nullptr;
+    // Duration term.
+    c_T_ = T_ / o_.duration_scale;
+    if (g) gT_ += w_.duration / o_.duration_scale;
+    // Acceleration term: (1/T) ∫ sum_j (q̈_j / a)^2 dt = ∫_0^1 sum_j (q''_j / (T^2 a))^2 ds, exact
+    // for piecewise-linear q'' (cubic segments).
+    const double a2 = o_.acceleration_scale * o_.acceleration_scale;
+    const double scale = 1.0 / (T_ * T_ * T_ * T_ * a2);
+    double sum = 0.0;
+    for (int j = 0; j < nj_; ++j) {
+      for (int k = 0; k < n_ - 1; ++k) {
+        const SplineStencil& s0 = seg_[2 * k];
+        const SplineStencil& s1 = seg_[2 * k + 1];
+        const double a0 = value(s0, 2, j), a1 = value(s1, 2, j);
+        sum += ds_ / 3.0 * (a0 * a0 + a0 * a1 + a1 * a1);
+        if (g) {
+          add_grad(s0, 2, j, w_.acceleration * scale * ds_ / 3.0 * (2.0 * a0 + a1));
+          add_grad(s1, 2, j, w_.acceleration * scale * ds_ / 3.0 * (a0 + 2.0 * a1));
+        }
+      }
+    }
+    c_A_ = sum * scale;
+    if (g) gT_ += -4.0 * w_.acceleration * c_A_ / T_;
+    // Workspace deviation (eqs 6–7, 20–23).
+    integrate_transition(g);
+    const Pose2 dq{y_[0], y_[1], y_[2]};
+    const double a = sigma_ - T_, b = sigma_;
+    const Pose2 dg = gait_pose(kin_, pb_.to, a, b, Pose2{}, o_.integration);
+    const double ex = dq.x - dg.x, ey = dq.y - dg.y, ep = dq.heading - dg.heading;
+    const double L2 = o_.position_scale * o_.position_scale;
+    const double H2 = o_.heading_scale * o_.heading_scale;
+    c_D_ = (ex * ex + ey * ey) / L2 + ep * ep / H2;
+    if (g) {
+      const double de[3] = {2.0 * ex / L2, 2.0 * ey / L2, 2.0 * ep / H2};
+      const int P = n_ + 3;
+      auto sens = [&](int p) {
+        return w_.deviation * (de[0] * y_[3 + 3 * p] + de[1] * y_[3 + 3 * p + 1] +
+                               de[2] * y_[3 + 3 * p + 2]);
+      };
+      gT_ += sens(0);
+      gm0_[kSteering] += sens(1);
+      gm1_[kSteering] += sens(2);
+      for (int i = 0; i < P - 3; ++i) gW_(kSteering, i) += sens(3 + i);
+      // Target D_g(a, b): dD/db = pose rate at b (in a's frame), dD/da = -v_a - w_a J p, -w_a.
+      double ta, ra, aa, tb, rb, ab;
+      pb_.to.evaluate(kSteering, a, ta, ra, aa);
+      pb_.to.evaluate(kSteering, b, tb, rb, ab);
+      double vxa, vya, wa, vxb, vyb, wb;
+      kin_.pose_rate(0.0, ta, ra, vxa, vya, wa);
+      kin_.pose_rate(dg.heading, tb, rb, vxb, vyb, wb);
+      const double dDa[3] = {-vxa + wa * dg.y, -vya - wa * dg.x, -wa};
+      const double dDb[3] = {vxb, vyb, wb};
+      for (int c = 0; c < 3; ++c) {
+        gT_ -= w_.deviation * de[c] * (-dDa[c]);
+        gSigma_ -= w_.deviation * de[c] * (dDa[c] + dDb[c]);
+      }
+    }
+    // Linear cost (eqs 18–19), Linear strategy only.
+    c_L_ = 0.0;
+    if (strategy_ == Strategy::Linear) {
+      const double norm = 1.0 / (n_ * o_.linear_scale * o_.linear_scale);
+      for (int j = 0; j < nj_; ++j) {
+        const double start = W_(j, 0), span = W_(j, n_ - 1) - start;
+        double g_end = 0.0;
+        for (int i = 1; i < n_ - 1; ++i) {
+          const double si = i * ds_;
+          const double r = W_(j, i) - (start + span * si);
+          c_L_ += norm * r * r;
+          if (g) {
+            gW_(j, i) += w_.linear * 2.0 * norm * r;
+            g_end -= w_.linear * 2.0 * norm * r * si;
+          }
+        }
+        if (g) gW_(j, n_ - 1) += g_end;
+      }
+    }
+    const double f = w_.duration * c_T_ + w_.acceleration * c_A_ + w_.deviation * c_D_ +
+                     (strategy_ == Strategy::Linear ? w_.linear * c_L_ : 0.0);
+    if (g) chain(grad);
+    return f;
+  }
+
+  // Inequality constraints (<= 0). Bezier: position and velocity limits at sampled times.
+  // Linear/Spline: eq 17 between consecutive waypoints, written linearly in (theta, T):
+  //   ±(θ_t − θ_{t−1}) / (θ̇_max ds) − T <= 0   (ds = 1/(N−1), Δt = T ds).
+  // Eq 16 (positions) is the box bound of the interior waypoints.
+  void constraints(const double* x, double* c, double* jac) {
+    unpack(x);
+    if (jac) std::fill(jac, jac + static_cast<std::size_t>(m_) * dim_, 0.0);
+    int row = 0;
+    if (strategy_ == Strategy::Bezier) {
+      for (int j = 0; j < nj_; ++j) {
+        const double P = pb_.position_limit[j], V = pb_.velocity_limit[j];
+        for (const SplineStencil& st : samples_) {
+          const double q = value(st, 0, j), qp = value(st, 1, j), v = qp / T_;
+          const double vals[4] = {(q - P) / P, (-q - P) / P, (v - V) / V, (-v - V) / V};
+          for (int r = 0; r < 4; ++r) {
+            c[row + r] = vals[r];
+            if (!jac) continue;
+            clear_grad();
+            const double sign = (r % 2 == 0) ? 1.0 : -1.0;
+            if (r < 2) {
+              add_grad(st, 0, j, sign / P);
+            } else {
+              add_grad(st, 1, j, sign / (V * T_));
+              gT_ += -sign * qp / (V * T_ * T_);
+            }
+            chain(jac + static_cast<std::size_t>(row + r) * dim_);
+          }
+          row += 4;
+        }
+      }
+    } else {
+      for (int j = 0; j < nj_; ++j) {
+        const double k = 1.0 / (pb_.velocity_limit[j] * ds_);
+        for (int i = 1; i < n_; ++i) {
+          const double d = W_(j, i) - W_(j, i - 1);
+          for (int r = 0; r < 2; ++r) {
+            const double sign = r == 0 ? 1.0 : -1.0;
+            c[row] = sign * d * k - T_;
+            if (jac) {
+              double* J = jac + static_cast<std::size_t>(row) * dim_;
+              J[0] = -1.0;
+              if (i == n_ - 1)
+                J[1] += sign * k * g2v_[j];
+              else
+                J[index(j, i)] += sign * k;
+              if (i - 1 >= 1) J[index(j, i - 1)] -= sign * k;
+            }
+            ++row;
+          }
+        }
+      }
+    }
+  }
+
+  double max_violation(const std::vector<double>& x, const std::vector<double>& lo,
+                       const std::vector<double>& hi) {
+    std::vector<double> c(m_);
+    constraints(x.data(), c.data(), nullptr);
+    double worst = -kInf;
+    for (double v : c) worst = std::max(worst, std::isfinite(v) ? v : kInf);
+    for (int i = 0; i < dim_; ++i) {
+      worst = std::max(worst, lo[i] - x[i]);
+      worst = std::max(worst, x[i] - hi[i]);
+    }
+    return worst;
+  }
+
+  TransitionResult build(const std::vector<double>& x, double f) {
+    unpack(x.data());
+    TransitionResult r;
+    r.requested = r.strategy = strategy_;
+    r.weights = w_;
+    r.t1 = pb_.t1;
+    r.duration = T_;
+    r.end_phase = sigma_;
+    r.phase_shift = pb_.t1 + T_ - sigma_;  // sigma = t1 + T - phi (eq 3)
+    r.spline = SplineTrajectory(W_, v1_, g2v_, T_);
+    r.cost = f;
+    r.cost_duration = c_T_;
+    r.cost_acceleration = c_A_;
+    r.cost_deviation = c_D_;
+    r.cost_linear = c_L_;
+    return r;
+  }
+
+ private:
+  const TransitionProblem& pb_;
+  AsterixKinematics kin_;
+  Strategy strategy_;
+  CostWeights w_;
+  TransitionOptions o_;
+  int nj_, n_, dim_ = 0, m_ = 0;
+  double ds_;
+  double T_ = 1.0, sigma_ = 0.0;
+  Eigen::MatrixXd W_, gW_;
+  Eigen::VectorXd m0_, m1_, v1_, g2v_, g2a_, gm0_, gm1_;
+  double gT_ = 0.0, gSigma_ = 0.0;
+  double c_T_ = 0.0, c_A_ = 0.0, c_D_ = 0.0, c_L_ = 0.0;
+  std::vector<SplineStencil> seg_, samples_;
+  std::vector<double> y_;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+TransitionResult optimise(const TransitionProblem& problem, Strategy strategy,
+                          const CostWeights& weights, const TransitionOptions& options,
+                          std::chrono::steady_clock::time_point start) {
+  const int n = strategy == Strategy::Bezier ? 2 : options.waypoints;
+  TransitionCost cost(problem, strategy, weights, options, n);
+  const int dim = cost.dimension();
+  const double budget = options.solver.max_time;
+  const double P2 = problem.to.period();
+
+  // Initial search over (T, end phase) on the two-point Bezier shape (shared by all strategies),
+  // using at most 40% of the budget.
+  std::vector<double> lo(dim), hi(dim);
+  lo[0] = options.min_duration;
+  hi[0] = options.max_duration;
+  lo[1] = -kInf;
+  hi[1] = kInf;
+  for (int j = 0; j < problem.joints(); ++j)
+    for (int i = 1; i < n - 1; ++i) {
+      lo[cost.index(j, i)] = -problem.position_limit[j];
+      hi[cost.index(j, i)] = problem.position_limit[j];
+    }
+  std::vector<double> best;
+  double best_score = kInf;
+  const double t_lo = std::max(options.min_duration, 0.25);
+  const double t_hi = std::min(options.max_duration, 12.0);
+  const int nt = options.initial_durations, np = options.initial_phases;
+  bool out_of_time = false;
+  double longest_eval = 0.0;  // of one candidate (constraints + cost without gradient)
+  for (int a = 0; a < nt && !out_of_time; ++a) {
+    const double T = nt == 1 ? t_lo : t_lo * std::pow(t_hi / t_lo, a / (nt - 1.0));
+    for (int b = 0; b < np; ++b) {
+      const double sigma = P2 * b / np;
+      const auto t_eval = std::chrono::steady_clock::now();
+      std::vector<double> x = cost.bezier_guess(T, sigma);
+      const double viol = cost.max_violation(x, lo, hi);
+      double score;
+      if (viol > options.feasibility_tol) {
+        score = 1e12 + viol;
+      } else {
+        try {
+          score = cost.objective(x.data(), nullptr);
+        } catch (const KinematicsError&) {
+          score = kInf;
+        }
+      }
+      longest_eval = std::max(longest_eval, seconds_since(t_eval));
+      if (std::isfinite(score) && score < best_score) {
+        best_score = score;
+        best = std::move(x);
+      }
+      if (seconds_since(start) > 0.4 * budget) {
+        out_of_time = true;
+        break;
+      }
+    }
+  }
+  if (best.empty()) throw std::runtime_error("initial search found no finite candidate");
+  lo[1] = best[1] - P2;
+  hi[1] = best[1] + P2;
+
+  OptimizationProblem op;
+  op.dimension = dim;
+  op.lower = lo;
+  op.upper = hi;
+  op.objective = [&cost](const double* x, double* grad) { return cost.objective(x, grad); };
+  op.inequality.push_back({cost.constraint_count(), [&cost](const double* x, double* c,
+                                                            double* jac) {
+                             cost.constraints(x, c, jac);
+                           }});
+  SolverOptions so = options.solver;
+  // Keep time for the final check of SLSQP's point (one cost and constraint evaluation).
+  so.max_time = budget - seconds_since(start) - 2.0 * longest_eval;
+  SolverResult sr;
+  if (so.max_time > 1e-4) {
+    sr = minimize_slsqp(op, best, so);
+  } else {
+    sr.x = best;
+    sr.value = best_score;
+    sr.status = NLOPT_MAXTIME_REACHED;
+    sr.status_name = "MAXTIME_REACHED";
+  }
+  for (double v : sr.x)
+    if (!std::isfinite(v)) throw std::runtime_error("SLSQP returned a non-finite point");
+  const double f = cost.objective(sr.x.data(), nullptr);
+  if (!std::isfinite(f)) throw std::runtime_error("the cost is not finite at SLSQP's point");
+  const double viol = cost.max_violation(sr.x, lo, hi);
+  if (viol > options.feasibility_tol) {
+    std::ostringstream os;
+    os << "SLSQP point infeasible (max violation " << viol << ", status " << sr.status_name << ")";
+    throw std::runtime_error(os.str());
+  }
+  if (sr.status < 0 && sr.status != NLOPT_ROUNDOFF_LIMITED)
+    throw std::runtime_error("SLSQP failed with status " + sr.status_name);
+  TransitionResult r = cost.build(sr.x, f);
+  r.solver = sr;
+  r.max_violation = viol;
+  return r;
+}
+
+}  // namespace
+
+int transition_dimension(const TransitionProblem& problem, Strategy strategy,
+                         const TransitionOptions& options) {
+  require(strategy != Strategy::Naive, "transition_dimension: Naive has no decision vector");
+  const int n = strategy == Strategy::Bezier ? 2 : options.waypoints;
+  return 2 + problem.joints() * (n - 2);
+}
+
+double transition_cost(const TransitionProblem& problem, Strategy strategy,
+                       const CostWeights& weights, const TransitionOptions& options,
+                       const std::vector<double>& x, std::vector<double>* grad) {
+  problem.validate();
+  weights.validate();
+  options.validate();
+  const int dim = transition_dimension(problem, strategy, options);
+  require(static_cast<int>(x.size()) == dim, "transition_cost: x has the wrong size");
+  TransitionCost cost(problem, strategy, weights, options,
+                      strategy == Strategy::Bezier ? 2 : options.waypoints);
+  if (grad) grad->assign(dim, 0.0);
+  return cost.objective(x.data(), grad ? grad->data() : nullptr);
+}
+
+void transition_constraints(const TransitionProblem& problem, Strategy strategy,
+                            const TransitionOptions& options, const std::vector<double>& x,
+                            std::vector<double>& values, std::vector<double>* jacobian) {
+  problem.validate();
+  options.validate();
+  const int dim = transition_dimension(problem, strategy, options);
+  require(static_cast<int>(x.size()) == dim, "transition_constraints: x has the wrong size");
+  TransitionCost cost(problem, strategy, CostWeights{}, options,
+                      strategy == Strategy::Bezier ? 2 : options.waypoints);
+  values.assign(cost.constraint_count(), 0.0);
+  if (jacobian) jacobian->assign(static_cast<std::size_t>(cost.constraint_count()) * dim, 0.0);
+  cost.constraints(x.data(), values.data(), jacobian ? jacobian->data() : nullptr);
+}
+
+TransitionResult plan_transition(const TransitionProblem& problem, Strategy strategy,
+                                 const CostWeights& weights, const TransitionOptions& options) {
+  problem.validate();
+  weights.validate();
+  options.validate();
+  const auto start = std::chrono::steady_clock::now();
+  if (strategy == Strategy::Naive) return naive_transition(problem);
+  std::string reason;
+  try {
+    TransitionResult r = optimise(problem, strategy, weights, options, start);
+    r.seconds = seconds_since(start);
+    return r;
+  } catch (const std::invalid_argument&) {
+    throw;  // a bad problem or option is the caller's error, never a silent fallback
+  } catch (const std::exception& e) {
+    if (!options.fallback) throw;
+    reason = e.what();
+  }
+  TransitionResult r = naive_transition(problem);
+  r.requested = strategy;
+  r.weights = weights;
+  r.fell_back = true;
+  r.fallback_reason = to_string(strategy) + " failed: " + reason;
+  r.seconds = seconds_since(start);
+  return r;
+}
+
+}  // namespace ernest::opt
