@@ -3,7 +3,7 @@
 Subpackages mirror the C++ tree: ``ernest_cpp.soil`` wraps ``cpp/soil``.
 """
 
-from . import opt, soil
+from . import opt, rl, soil
 
-__all__ = ["opt", "soil"]
+__all__ = ["opt", "rl", "soil"]
 __version__ = "0.1.0"

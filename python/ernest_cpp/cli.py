@@ -6,9 +6,10 @@ import argparse
 import sys
 
 from . import soil_curves, transitions
+from .rl import commands as rl_commands
 
 # Each module exposes add_parser(subparsers) and sets `func` on its parser.
-_COMMANDS = [soil_curves, transitions]
+_COMMANDS = [soil_curves, rl_commands, transitions]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,123 @@
+"""Console subcommands ``ernest train``, ``ernest consolidate`` and ``ernest export``.
+
+Heavy imports (torch, gymnasium) happen only when a command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+
+
+def _settings_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--preset", default="quick", choices=("quick", "paper"),
+                   help="base settings (python/ernest_cpp/rl/presets/<preset>.yaml)")
+    p.add_argument("--config", metavar="YAML", help="YAML file overriding the preset")
+    p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[],
+                   help="override one setting, e.g. --set td3.batch_size=256 (repeatable)")
+
+
+def _build(args, extra: dict | None = None) -> dict:
+    from .config import build_config, merge
+
+    cfg = build_config(args.preset, args.config, args.set)
+    return merge(cfg, extra) if extra else cfg
+
+
+def _train(args) -> int:
+    from .trainer import Trainer, resolve_env_id
+
+    extra: dict = {}
+    if args.env or args.scenario:
+        extra["env"] = {"id": args.env, "scenario": args.scenario}
+    if args.seed is not None:
+        extra["seed"] = args.seed
+    if args.steps is not None:
+        extra["total_steps"] = args.steps
+    cfg = _build(args, extra)
+    if args.resume and not args.run_dir:
+        raise ValueError("--resume needs --run-dir")
+    env_id = resolve_env_id(cfg["env"])
+    run_dir = args.run_dir or os.path.join(
+        "runs", f"{re.sub(r'[^A-Za-z0-9_.-]+', '_', env_id)}-seed{cfg['seed']}")
+    if args.resume:
+        from .trainer import load_checkpoint
+
+        saved = load_checkpoint(run_dir, with_buffer=False)["state"]["config"]
+        # The saved settings win except for what this command line changes explicitly.
+        from .config import merge
+
+        cfg = merge(saved, extra) if extra else saved
+        for o in args.set:
+            from .config import parse_assignment
+
+            cfg = merge(cfg, parse_assignment(o))
+    tr = Trainer(cfg, run_dir, resume=args.resume)
+    print(f"training on {env_id} ({tr.n} simulations, obs {tr.obs_dim}, act {tr.act_dim}, layout "
+          f"{tr.layout.version}, FTS noise on {tr.buffer.noise_idx.size} components) -> {run_dir}")
+    try:
+        res = tr.train()
+    finally:
+        tr.close()
+    print(json.dumps({k: v for k, v in res.items()}, indent=1))
+    return 0
+
+
+def _consolidate(args) -> int:
+    from .consolidate import consolidate_runs
+
+    cfg = _build(args)
+    print(f"consolidating {len(args.runs)} runs -> {args.out}")
+    res = consolidate_runs(args.runs, cfg, args.out, evaluate_policies=not args.no_eval)
+    print(f"checkpoint: {res['checkpoint']}")
+    if res["table"]:
+        print(f"evaluation table: {os.path.join(args.out, 'evaluation.csv')}")
+    return 0
+
+
+def _export(args) -> int:
+    from . import layout as L
+    from .export import export_actor
+    from .trainer import agent_from_checkpoint, load_checkpoint
+
+    ck = load_checkpoint(args.checkpoint, with_buffer=False)
+    agent = agent_from_checkpoint(ck)
+    lay = L.ObservationLayout.from_dict(ck["state"]["layout"])
+    meta = export_actor(agent.actor, lay, args.out, args.policy_rate,
+                        {"source_checkpoint": os.path.abspath(ck["path"]),
+                         "env_id": ck["state"]["env_id"]})
+    print(f"wrote {args.out}: {meta['obs_dim']} -> {meta['act_dim']}, layout "
+          f"{meta['layout_version']}, {meta['policy_rate_hz']} Hz, verified against the Python "
+          f"actor (max abs error {meta['verified_max_abs_error']:.2g})")
+    return 0
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser("train", help="train a TD3 specialist (seed 004 §4.1, §4.4)",
+                              description="Train a TD3 specialist on a Gymnasium environment.")
+    p.add_argument("--env", help="any registered Gymnasium id with Box spaces, e.g. "
+                   "ernest-toy/PointMass-v0")
+    p.add_argument("--scenario", choices=("rockfield", "step", "ripples", "slope"),
+                   help="ERNEST training scenario (env id ernest/<Scenario>-v0)")
+    _settings_args(p)
+    p.add_argument("--run-dir", help="output folder (default runs/<env>-seed<seed>)")
+    p.add_argument("--resume", action="store_true", help="continue the run in --run-dir exactly")
+    p.add_argument("--steps", type=int, help="total transitions to collect (total_steps)")
+    p.add_argument("--seed", type=int)
+    p.set_defaults(func=_train)
+
+    p = subparsers.add_parser("consolidate", help="pool specialists' experience and train one "
+                              "policy (seed 004 §4.6)")
+    p.add_argument("runs", nargs="+", metavar="RUN", help="specialist run or checkpoint folders")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--no-eval", action="store_true", help="skip the evaluation table")
+    _settings_args(p)
+    p.set_defaults(func=_consolidate)
+
+    p = subparsers.add_parser("export", help="export an actor to TorchScript with its scaling")
+    p.add_argument("checkpoint", help="run, consolidation or checkpoint folder")
+    p.add_argument("--out", required=True, help="output .pt file")
+    p.add_argument("--policy-rate", type=float, default=2.0, help="policy rate in Hz (Table 5: 2)")
+    p.set_defaults(func=_export)

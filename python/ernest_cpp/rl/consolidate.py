@@ -1,0 +1,140 @@
+"""Policy consolidation (seed 004 §4.6, Table 4).
+
+The most recent ``per_run`` (1e6) transitions of each specialist's replay buffer are pooled
+(buffer 4e6 for four specialists) and a freshly initialised actor–critic pair is trained on this pool
+alone, with the same TD3 algorithm but minibatch 512, learning rate 1e-3 and 1e4 iterations. FTS noise
+is still injected on sampling (it is part of the learning algorithm, §4.2). No simulation is run while
+training; afterwards the consolidated actor and every specialist are evaluated on every specialist's
+environment and the results written as a table.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import time
+
+import numpy as np
+import torch
+
+from . import layout as L
+from .replay import ReplayBuffer
+from .storage import AtomicDir
+from .td3 import TD3, TD3Config
+from .trainer import (agent_from_checkpoint, evaluate, find_checkpoint, load_checkpoint, make_env,
+                      noise_for)
+
+
+def pool_buffers(sources: list, per_run: int, capacity: int | None = None) -> ReplayBuffer:
+    """Most recent ``per_run`` transitions of each buffer (ReplayBuffer or saved folder), pooled."""
+    parts = []
+    for s in sources:
+        buf = s if isinstance(s, ReplayBuffer) else ReplayBuffer.load(s)
+        parts.append(buf.last_n(per_run))
+    total = sum(len(p) for p in parts)
+    if capacity is not None and total > capacity:
+        raise ValueError(f"consolidate: pooled {total} transitions exceed buffer_size {capacity}")
+    return ReplayBuffer.merge(parts, capacity)
+
+
+def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, seed: int = 0,
+                    progress=None) -> tuple[TD3, dict]:
+    """Fresh TD3 trained for ``iterations`` updates on ``buffer`` alone (no environment)."""
+    agent = TD3(buffer.obs_dim, buffer.act_dim, td3_cfg, seed=seed)
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 0xC0]))
+    losses, t0 = [], time.perf_counter()
+    for it in range(int(iterations)):
+        m = agent.update(buffer.sample(td3_cfg.batch_size, rng))
+        losses.append(m["critic_loss"])
+        if progress is not None:
+            progress(it + 1, m)
+    dt = time.perf_counter() - t0
+    return agent, {"iterations": int(iterations), "seconds": dt,
+                   "final_critic_loss": float(np.mean(losses[-100:])) if losses else float("nan")}
+
+
+def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies: bool = True,
+                     log=print) -> dict:
+    c = cfg["consolidate"]
+    torch.set_num_threads(int(cfg["torch_threads"]))
+    specialists = []
+    for r in runs:
+        ck = load_checkpoint(r, with_buffer=True)
+        if "buffer" not in ck:
+            raise ValueError(f"{r}: checkpoint {ck['path']} holds no replay buffer")
+        specialists.append(ck)
+        log(f"  {r}: {ck['state']['env_id']}, {len(ck['buffer'])} transitions, step "
+            f"{ck['state']['step']}")
+    dims = {(s["state"]["obs_dim"], s["state"]["act_dim"]) for s in specialists}
+    if len(dims) != 1:
+        raise ValueError(f"consolidate: runs have different observation/action sizes {dims}")
+    lay = L.ObservationLayout.from_dict(specialists[0]["state"]["layout"])
+    pool = pool_buffers([s["buffer"] for s in specialists], int(c["per_run"]),
+                        int(c["buffer_size"]))
+    pool.set_noise(*noise_for(cfg["noise"], lay))
+    log(f"  pooled {len(pool)} transitions (capacity {pool.capacity}); noise on "
+        f"{pool.noise_idx.size} components")
+    base = dict(specialists[0]["state"]["td3"])
+    base.update(batch_size=int(c["batch_size"]), actor_lr=float(c["lr"]),
+                critic_lr=float(c["lr"]), hidden=int(c["hidden"]))
+    td3_cfg = TD3Config(**base).validate()
+    bar = None
+    if cfg["log"]["progress_bar"]:
+        from tqdm import tqdm
+
+        bar = tqdm(total=int(c["iterations"]), unit="it", dynamic_ncols=True)
+    agent, info = train_on_buffer(pool, td3_cfg, int(c["iterations"]), int(cfg["seed"]),
+                                  (lambda i, m: bar.update(1)) if bar else None)
+    if bar:
+        bar.close()
+    log(f"  {info['iterations']} iterations in {info['seconds']:.1f} s")
+    state = {"env_id": "consolidated", "obs_dim": pool.obs_dim, "act_dim": pool.act_dim,
+             "td3": agent.config_dict(), "layout": lay.to_dict(), "step": 0,
+             "updates": agent.updates, "sources": [s["path"] for s in specialists],
+             "config": cfg, "consolidation": info}
+    ck_root = os.path.join(out_dir, "checkpoints")
+    with AtomicDir(os.path.join(ck_root, "consolidated"), "checkpoint",
+                   {"consolidated": True}) as tmp:
+        torch.save(agent.state_dict(), os.path.join(tmp, "agent.pt"))
+        with open(os.path.join(tmp, "state.json"), "w") as fh:
+            json.dump(state, fh)
+    with open(os.path.join(ck_root, "LATEST"), "w") as fh:
+        fh.write("consolidated\n")
+    result = {"checkpoint": os.path.join(ck_root, "consolidated"), "info": info, "table": []}
+    if evaluate_policies:
+        result["table"] = evaluation_table(agent, specialists, cfg, out_dir, log)
+    return result
+
+
+def evaluation_table(agent: TD3, specialists: list[dict], cfg: dict, out_dir: str, log=print):
+    """Consolidated actor vs every specialist on every specialist's environment."""
+    ev = cfg["eval"]
+    envs = []
+    for s in specialists:
+        env_id = s["state"]["env_id"]
+        kwargs = s["state"]["config"]["env"].get("kwargs") or {}
+        if env_id not in [e[0] for e in envs]:
+            envs.append((env_id, kwargs))
+    policies = [("consolidated", agent)] + [
+        (os.path.basename(os.path.dirname(os.path.dirname(s["path"]))) or s["path"],
+         agent_from_checkpoint(s)) for s in specialists]
+    rows = []
+    for env_id, kwargs in envs:
+        env = make_env(env_id, kwargs)
+        for name, pol in policies:
+            res = evaluate(pol.act, env, int(cfg["consolidate"]["eval_episodes"]), int(ev["seed"]),
+                           ev.get("info_keys") or ())
+            rows.append({"policy": name, "env": env_id, **res})
+            log(f"  {name:>20s} on {env_id}: return {res['return']:.3f}")
+        env.close()
+    keys = sorted({k for r in rows for k in r}, key=lambda k: (k not in ("policy", "env"), k))
+    with open(os.path.join(out_dir, "evaluation.csv"), "w", newline="") as fh:
+        w = csv.DictWriter(fh, keys)
+        w.writeheader()
+        w.writerows(rows)
+    return rows
+
+
+__all__ = ["pool_buffers", "train_on_buffer", "consolidate_runs", "evaluation_table",
+           "find_checkpoint"]

@@ -1,0 +1,156 @@
+"""TD3 (Fujimoto et al. 2018, the algorithm of seed 004 §4.1) with the hyperparameters of Tables 4–5.
+
+One update (``TD3.update``) on a minibatch (s, a, r, s', terminated):
+
+* target action  a' = clip(π'(s') + clip(ε, -c, c), -1, 1),  ε ~ N(0, σ²)   (Table 5: σ 0.05, c 0.2)
+* target         y  = r + γ (1 - terminated) min(Q1'(s', a'), Q2'(s', a'))  (γ = 0.99)
+* critic loss    (Q1(s, a) - y)² + (Q2(s, a) - y)²
+* every d-th update (d = 2): actor loss -Q1(s, π(s)), then soft target updates θ' ← τ θ + (1-τ) θ'
+  (τ = 5e-3) for actor and both critics.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from .networks import Actor, TwinCritic
+
+
+@dataclass
+class TD3Config:
+    gamma: float = 0.99  # Table 5
+    tau: float = 5e-3  # Table 5
+    policy_delay: int = 2  # Table 5
+    target_noise: float = 0.05  # Table 5, std of ε
+    target_noise_clip: float = 0.2  # Table 5, c
+    batch_size: int = 128  # Table 4 (specialists); 512 for consolidation
+    actor_lr: float = 1e-5  # Table 4 (specialists); 1e-3 for consolidation
+    critic_lr: float = 1e-5
+    hidden: int = 512  # §4.1
+
+    def validate(self) -> "TD3Config":
+        for name in ("gamma", "tau", "target_noise", "target_noise_clip", "actor_lr", "critic_lr",
+                     "policy_delay", "batch_size", "hidden"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ValueError(f"td3.{name} = {v!r} is not a number")
+        checks = [("gamma", 0.0 <= self.gamma <= 1.0, "[0, 1]"),
+                  ("tau", 0.0 < self.tau <= 1.0, "(0, 1]"),
+                  ("policy_delay", self.policy_delay >= 1, ">= 1"),
+                  ("target_noise", self.target_noise >= 0, ">= 0"),
+                  ("target_noise_clip", self.target_noise_clip >= 0, ">= 0"),
+                  ("batch_size", self.batch_size >= 1, ">= 1"),
+                  ("actor_lr", self.actor_lr > 0, "> 0"), ("critic_lr", self.critic_lr > 0, "> 0"),
+                  ("hidden", self.hidden >= 1, ">= 1")]
+        for name, ok, rng in checks:
+            if not ok:
+                raise ValueError(f"td3.{name} = {getattr(self, name)!r} is outside {rng}")
+        return self
+
+
+def _as_tensor(x) -> torch.Tensor:
+    if isinstance(x, torch.Tensor):
+        return x.float()
+    return torch.from_numpy(np.ascontiguousarray(x, dtype=np.float32))
+
+
+class TD3:
+    """Actor, twin critics, their targets and Adam optimisers; the update counter decides the delay."""
+
+    def __init__(self, obs_dim: int, act_dim: int, config: TD3Config | None = None, seed: int = 0):
+        self.config = (config or TD3Config()).validate()
+        self.obs_dim, self.act_dim = obs_dim, act_dim
+        c = self.config
+        # Initialisation and target noise are drawn from our own generator: reproducible, and
+        # independent of whatever else touches torch's global RNG.
+        self.gen = torch.Generator().manual_seed(int(seed))
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(seed))
+            self.actor = Actor(obs_dim, act_dim, c.hidden)
+            self.critic = TwinCritic(obs_dim, act_dim, c.hidden)
+        self.actor_target = copy.deepcopy(self.actor).requires_grad_(False)
+        self.critic_target = copy.deepcopy(self.critic).requires_grad_(False)
+        self.actor_opt = torch.optim.Adam(self.actor.parameters(), lr=c.actor_lr)
+        self.critic_opt = torch.optim.Adam(self.critic.parameters(), lr=c.critic_lr)
+        self.updates = 0
+
+    @torch.no_grad()
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """Deterministic policy action(s) in [-1, 1] for one observation or a batch."""
+        o = _as_tensor(obs)
+        single = o.dim() == 1
+        a = self.actor(o.unsqueeze(0) if single else o)
+        a = a.numpy().astype(np.float64)
+        return a[0] if single else a
+
+    def update(self, batch: dict) -> dict:
+        c = self.config
+        obs, act = _as_tensor(batch["obs"]), _as_tensor(batch["act"])
+        rew, next_obs = _as_tensor(batch["rew"]), _as_tensor(batch["next_obs"])
+        done = _as_tensor(batch["done"])
+        with torch.no_grad():
+            eps = torch.randn(act.shape, generator=self.gen) * c.target_noise
+            eps = eps.clamp(-c.target_noise_clip, c.target_noise_clip)
+            next_act = (self.actor_target(next_obs) + eps).clamp(-1.0, 1.0)
+            tq1, tq2 = self.critic_target(next_obs, next_act)
+            target = rew + c.gamma * (1.0 - done) * torch.min(tq1, tq2)
+        q1, q2 = self.critic(obs, act)
+        critic_loss = F.mse_loss(q1, target) + F.mse_loss(q2, target)
+        self.critic_opt.zero_grad(set_to_none=True)
+        critic_loss.backward()
+        self.critic_opt.step()
+        self.updates += 1
+        info = {"critic_loss": critic_loss.item(), "q1": q1.mean().item(),
+                "q_target": target.mean().item()}
+        if self.updates % c.policy_delay == 0:
+            # Critic weights are constants for the actor step: skip their weight gradients.
+            q1_params = list(self.critic.q1.parameters())
+            for p in q1_params:
+                p.requires_grad_(False)
+            actor_loss = -self.critic.q1(obs, self.actor(obs)).mean()
+            self.actor_opt.zero_grad(set_to_none=True)
+            actor_loss.backward()
+            for p in q1_params:
+                p.requires_grad_(True)
+            self.actor_opt.step()
+            self._soft_update()
+            info["actor_loss"] = actor_loss.item()
+        return info
+
+    @torch.no_grad()
+    def _soft_update(self):
+        tau = self.config.tau
+        for net, tgt in ((self.actor, self.actor_target), (self.critic, self.critic_target)):
+            for p, tp in zip(net.parameters(), tgt.parameters()):
+                tp.mul_(1.0 - tau).add_(p, alpha=tau)
+
+    # ---------------------------------------------------------------- persistence
+    def state_dict(self) -> dict:
+        return {"actor": self.actor.state_dict(), "critic": self.critic.state_dict(),
+                "actor_target": self.actor_target.state_dict(),
+                "critic_target": self.critic_target.state_dict(),
+                "actor_opt": self.actor_opt.state_dict(), "critic_opt": self.critic_opt.state_dict(),
+                "gen": self.gen.get_state(), "updates": torch.tensor(self.updates),
+                "dims": torch.tensor([self.obs_dim, self.act_dim, self.config.hidden])}
+
+    def load_state_dict(self, sd: dict) -> None:
+        dims = [int(v) for v in sd["dims"]]
+        if dims != [self.obs_dim, self.act_dim, self.config.hidden]:
+            raise ValueError(f"checkpoint networks have (obs, act, hidden) = {tuple(dims)}, this "
+                             f"agent has {(self.obs_dim, self.act_dim, self.config.hidden)}")
+        self.actor.load_state_dict(sd["actor"])
+        self.critic.load_state_dict(sd["critic"])
+        self.actor_target.load_state_dict(sd["actor_target"])
+        self.critic_target.load_state_dict(sd["critic_target"])
+        self.actor_opt.load_state_dict(sd["actor_opt"])
+        self.critic_opt.load_state_dict(sd["critic_opt"])
+        self.gen.set_state(sd["gen"])
+        self.updates = int(sd["updates"])
+
+    def config_dict(self) -> dict:
+        return asdict(self.config)
