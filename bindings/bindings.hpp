@@ -6,4 +6,5 @@
 namespace ernest::bindings {
 void bind_soil(pybind11::module_& m);
 void bind_opt(pybind11::module_& m);
+void bind_sensing(pybind11::module_& m);
 }  // namespace ernest::bindings

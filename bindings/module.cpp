@@ -9,4 +9,7 @@ PYBIND11_MODULE(_core, m) {
   ernest::bindings::bind_soil(soil);
   auto opt = m.def_submodule("opt", "Asterix gait transitions with NLopt SLSQP (seed 000)");
   ernest::bindings::bind_opt(opt);
+  auto sensing = m.def_submodule(
+      "sensing", "Force–torque processing, elevation sampling, observation and reward (seed 004 §4.2–4.3)");
+  ernest::bindings::bind_sensing(sensing);
 }
