@@ -66,7 +66,7 @@ double objective_trampoline(unsigned /*n*/, const double* x, double* grad, void*
     ctx->longest_interval = std::max(
         ctx->longest_interval, std::chrono::duration<double>(now - ctx->last_call).count());
     const double elapsed = std::chrono::duration<double>(now - ctx->start).count();
-    if (elapsed + 1.5 * ctx->longest_interval > ctx->max_time) {  // 1.5: shared-CPU jitter
+    if (elapsed + 2.0 * ctx->longest_interval > ctx->max_time) {  // 2x: shared-CPU jitter
       ctx->deadline_stop = true;  // NLopt keeps the best point found so far in x
       ctx->opt->force_stop();
       return HUGE_VAL;

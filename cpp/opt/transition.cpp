@@ -607,8 +607,9 @@ TransitionResult optimise(const TransitionProblem& problem, Strategy strategy,
                              cost.constraints(x, c, jac);
                            }});
   SolverOptions so = options.solver;
-  // Keep time for the final check of SLSQP's point (one cost and constraint evaluation).
-  so.max_time = budget - seconds_since(start) - 2.0 * longest_eval;
+  // Keep time for the final check of SLSQP's point (one cost and constraint evaluation) and 2% of
+  // the budget for scheduling jitter on shared machines.
+  so.max_time = budget - seconds_since(start) - 2.0 * longest_eval - 0.02 * budget;
   SolverResult sr;
   if (so.max_time > 1e-4) {
     sr = minimize_slsqp(op, best, so);
