@@ -422,7 +422,11 @@ TEST(Transitions, BudgetIsHonoured) {
     const auto t1 = std::chrono::steady_clock::now();
     const TransitionResult r = plan_transition(pb, s, w, o);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    EXPECT_LE(wall, o.solver.max_time + one_eval) << to_string(s) << " one eval " << one_eval;
+    // NLopt can stop only between evaluations, so "one evaluation" here is one SLSQP iteration
+    // (its dense QP plus our cost and constraints), measured in this run.
+    const double one_iteration = r.solver.seconds / std::max(1, r.solver.evaluations) + one_eval;
+    EXPECT_LE(wall, o.solver.max_time + one_iteration)
+        << to_string(s) << " one iteration " << one_iteration;
     EXPECT_FALSE(r.fell_back) << r.fallback_reason;
     EXPECT_LE(r.max_violation, o.feasibility_tol);
   }

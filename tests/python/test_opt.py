@@ -110,7 +110,9 @@ def test_every_strategy_plans_a_feasible_transition(strategy):
     pb = O.asterix_problem(1.6)
     t0 = time.perf_counter()
     r = O.plan(pb, strategy, "balanced", max_time=0.3)
-    assert time.perf_counter() - t0 < 0.3 + 0.1
+    wall = time.perf_counter() - t0
+    iteration = r.solver.seconds / max(1, r.solver.evaluations)
+    assert wall < 0.3 + iteration + 0.02  # budget + one SLSQP iteration + Python overhead
     assert not r.fell_back, r.fallback_reason
     m = O.evaluate_metrics(pb, r)
     assert m.start_position_residual < 1e-9 and m.end_position_residual < 1e-9
