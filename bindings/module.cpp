@@ -7,6 +7,9 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "C++ core of ernest-cpp (soil, dynamics, optimisation). Use the ernest_cpp package.";
   auto soil = m.def_submodule("soil", "Bekker–Wong soft soil and rigid contact (seed 004 §3.3–3.4)");
   ernest::bindings::bind_soil(soil);
+  auto dynamics = m.def_submodule(
+      "dynamics", "ERNEST multibody dynamics on ODE, wheel synchroniser (seed 004 §2–3)");
+  ernest::bindings::bind_dynamics(dynamics);
   auto opt = m.def_submodule("opt", "Asterix gait transitions with NLopt SLSQP (seed 000)");
   ernest::bindings::bind_opt(opt);
   auto sensing = m.def_submodule(

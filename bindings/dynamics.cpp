@@ -1,0 +1,307 @@
+// Python bindings of cpp/dynamics. Argument names equal the C++ names; stepping releases the GIL.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "ernest/dynamics/batch_stepper.hpp"
+#include "ernest/dynamics/rover_parameters.hpp"
+#include "ernest/dynamics/rover_sim.hpp"
+#include "ernest/dynamics/terrain.hpp"
+#include "ernest/dynamics/wheel_sync.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace ernest::bindings {
+
+using namespace ernest::dynamics;
+
+namespace {
+
+template <size_t N>
+py::array_t<double> arr(const std::array<double, N>& a) {
+  py::array_t<double> out(N);
+  std::copy(a.begin(), a.end(), out.mutable_data());
+  return out;
+}
+
+using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+}  // namespace
+
+void bind_dynamics(py::module_& m) {
+  py::register_exception<SimulationDiverged>(m, "SimulationDiverged", PyExc_RuntimeError);
+
+  py::class_<MotorParameters>(m, "MotorParameters",
+                              "DC motor + gearbox (seed 004 §2.1.1, eq 40). Values are assumptions.")
+      .def(py::init<>())
+      .def_readwrite("torque_constant", &MotorParameters::torque_constant, "K_tau [N m/A]")
+      .def_readwrite("resistance", &MotorParameters::resistance, "R [Ohm]")
+      .def_readwrite("gear_ratio", &MotorParameters::gear_ratio, "N [-]")
+      .def_readwrite("efficiency", &MotorParameters::efficiency, "gearbox efficiency [-]")
+      .def_readwrite("current_limit", &MotorParameters::current_limit, "[A]")
+      .def_readwrite("rotor_inertia", &MotorParameters::rotor_inertia, "[kg m^2], motor side")
+      .def("max_output_torque", &MotorParameters::max_output_torque,
+           "N eta K_tau I_max: the largest output torque [N m].");
+
+  py::class_<MotorElectrical>(m, "MotorElectrical", "Winding current [A] and power [W] (eq 40).")
+      .def_readonly("current", &MotorElectrical::current)
+      .def_readonly("power", &MotorElectrical::power);
+  m.def("motor_electrical", &motor_electrical, "m"_a, "output_torque"_a, "output_speed"_a,
+        "Current and electrical power P = I (R I + K_tau omega) (eq 40) for an output torque "
+        "[N m] and speed [rad/s]; the gearbox efficiency applies in the direction power flows.");
+
+  py::class_<RoverParameters>(m, "RoverParameters",
+                              "ERNEST model parameters: Table 1 geometry plus documented "
+                              "assumptions (mass split, inertias, gimbal, motors, sensors).")
+      .def(py::init<>())
+      .def_readwrite("wheelbase", &RoverParameters::wheelbase, "[m] (Table 1)")
+      .def_readwrite("track", &RoverParameters::track, "[m] (Table 1)")
+      .def_readwrite("wheel_radius", &RoverParameters::wheel_radius, "[m] (Table 1)")
+      .def_readwrite("wheel_width", &RoverParameters::wheel_width, "[m] (Table 1)")
+      .def_readwrite("chassis_mass", &RoverParameters::chassis_mass, "[kg] without rear wheels")
+      .def_readwrite("bogie_mass", &RoverParameters::bogie_mass, "[kg] without front wheels")
+      .def_readwrite("wheel_assembly_mass", &RoverParameters::wheel_assembly_mass, "[kg] each")
+      .def_readwrite("chassis_com", &RoverParameters::chassis_com, "(x_c, y_c, z_c) [m], §3.2")
+      .def_readwrite("bogie_com_height", &RoverParameters::bogie_com_height, "z_b [m], §3.2")
+      .def_readwrite("chassis_inertia", &RoverParameters::chassis_inertia, "principal [kg m^2]")
+      .def_readwrite("bogie_inertia", &RoverParameters::bogie_inertia, "principal [kg m^2]")
+      .def_readwrite("wheel_spin_inertia", &RoverParameters::wheel_spin_inertia, "[kg m^2]")
+      .def_readwrite("wheel_transverse_inertia", &RoverParameters::wheel_transverse_inertia)
+      .def_readwrite("gimbal_height", &RoverParameters::gimbal_height, "[m] above the axles")
+      .def_readwrite("yaw_limit", &RoverParameters::yaw_limit, "[rad]")
+      .def_readwrite("roll_limit", &RoverParameters::roll_limit, "[rad]")
+      .def_readwrite("stop_stiffness", &RoverParameters::stop_stiffness, "[N m/rad]")
+      .def_readwrite("stop_damping", &RoverParameters::stop_damping, "[N m s/rad]")
+      .def_readwrite("yaw_brake_torque", &RoverParameters::yaw_brake_torque, "[N m]")
+      .def_readwrite("clutch_align_speed", &RoverParameters::clutch_align_speed, "[rad/s]")
+      .def_readwrite("clutch_align_gain", &RoverParameters::clutch_align_gain, "[1/s]")
+      .def_readwrite("clutch_align_tolerance", &RoverParameters::clutch_align_tolerance, "[rad]")
+      .def_readwrite("wheel_motor", &RoverParameters::wheel_motor, "50:1 drive")
+      .def_readwrite("gimbal_motor", &RoverParameters::gimbal_motor, "160:1 gimbal actuators")
+      .def_readwrite("fts_height", &RoverParameters::fts_height, "sensor above wheel centre [m]")
+      .def("validate", &RoverParameters::validate, "Raise ValueError naming an invalid field.")
+      .def("total_mass", &RoverParameters::total_mass, "[kg]")
+      .def("wheel_centre", &RoverParameters::wheel_centre, "i"_a,
+           "Nominal centre of wheel i (0 FL, 1 FR, 2 RL, 3 RR) in the rover frame [m].")
+      .def("gimbal_point", &RoverParameters::gimbal_point, "Gimbal centre in the rover frame [m].");
+
+  py::class_<HeightMap>(m, "HeightMap",
+                        "Height grid: heights[i, j] at (origin_x + i spacing, origin_y + j "
+                        "spacing); bilinear height and normal; flat beyond the border.")
+      .def(py::init<Eigen::MatrixXd, double, double, double>(), "heights"_a, "spacing"_a,
+           "origin_x"_a, "origin_y"_a)
+      .def_static("flat", &HeightMap::flat, "length"_a, "width"_a, "spacing"_a, "z"_a = 0.0,
+                  "x0"_a = -5.0, "y0"_a = -5.0, "Flat ground at height z.")
+      .def_static("slope", &HeightMap::slope, "angle"_a, "length"_a, "width"_a, "spacing"_a,
+                  "x0"_a = -5.0, "y0"_a = -5.0, "Plane z = tan(angle) x rising along +x.")
+      .def("height", &HeightMap::height, "x"_a, "y"_a, "Bilinear height [m].")
+      .def("normal", &HeightMap::normal, "x"_a, "y"_a, "Unit upward normal of the surface.")
+      .def_property_readonly("heights", &HeightMap::heights)
+      .def_property_readonly("spacing", &HeightMap::spacing)
+      .def_property_readonly("origin_x", &HeightMap::origin_x)
+      .def_property_readonly("origin_y", &HeightMap::origin_y);
+
+  py::class_<BoxObstacle>(m, "BoxObstacle", "Rigid box: centre, full size, yaw/pitch/roll [rad].")
+      .def(py::init([](const Eigen::Vector3d& centre, const Eigen::Vector3d& size, double yaw,
+                       double pitch, double roll) {
+             BoxObstacle b{centre, size, yaw, pitch, roll};
+             b.validate();
+             return b;
+           }),
+           "centre"_a, "size"_a, "yaw"_a = 0.0, "pitch"_a = 0.0, "roll"_a = 0.0)
+      .def_readwrite("centre", &BoxObstacle::centre)
+      .def_readwrite("size", &BoxObstacle::size)
+      .def_readwrite("yaw", &BoxObstacle::yaw)
+      .def_readwrite("pitch", &BoxObstacle::pitch)
+      .def_readwrite("roll", &BoxObstacle::roll);
+
+  py::enum_<GroundType>(m, "GroundType", "Soft soil (Bekker–Wong) or rigid ground (§3.4).")
+      .value("Soil", GroundType::Soil)
+      .value("Rigid", GroundType::Rigid);
+  py::enum_<ActuatorMode>(m, "ActuatorMode", "Velocity servo, torque command, or unpowered.")
+      .value("Velocity", ActuatorMode::Velocity)
+      .value("Torque", ActuatorMode::Torque)
+      .value("Off", ActuatorMode::Off);
+  py::enum_<ClutchState>(m, "ClutchState", "Roll clutch state (§2.2).")
+      .value("Disengaged", ClutchState::Disengaged)
+      .value("Aligning", ClutchState::Aligning)
+      .value("Engaged", ClutchState::Engaged);
+
+  py::class_<SimOptions>(m, "SimOptions", "Simulation options (step, soil, rigid contact, seed).")
+      .def(py::init<>())
+      .def_readwrite("dt", &SimOptions::dt, "physics step [s] (default from the step study)")
+      .def_readwrite("seed", &SimOptions::seed, "seeds the friction draw (std::mt19937_64)")
+      .def_readwrite("ground", &SimOptions::ground)
+      .def_readwrite("soil", &SimOptions::soil, "ernest_cpp.soil.SoilParameters")
+      .def_readwrite("soil_points_per_panel", &SimOptions::soil_points_per_panel)
+      .def_readwrite("soil_normal_damping", &SimOptions::soil_normal_damping,
+                     "one-sided soil damping [N s/m] (assumption)")
+      .def_readwrite("rigid", &SimOptions::rigid, "ernest_cpp.soil.RigidContactParameters")
+      .def_readwrite("friction", &SimOptions::friction, "< 0 draws it from rigid with the seed")
+      .def_readwrite("rigid_slip", &SimOptions::rigid_slip, "tyre creep [(m/s)/N] (assumption)")
+      .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
+      .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
+      .def("validate", &SimOptions::validate, "Raise ValueError naming an invalid field.");
+
+  py::class_<Commands>(m, "Commands",
+                       "Actuator set-points, held until changed. Assign whole lists to the "
+                       "array fields (c.wheel_speed = [...]); item assignment is not kept.")
+      .def(py::init<>())
+      .def_readwrite("wheel_speed", &Commands::wheel_speed, "4 wheel speeds [rad/s]")
+      .def_readwrite("wheel_torque", &Commands::wheel_torque, "4 torques [N m] (Torque mode)")
+      .def_readwrite("wheel_mode", &Commands::wheel_mode)
+      .def_readwrite("yaw_rate", &Commands::yaw_rate, "psi_dot [rad/s]")
+      .def_readwrite("roll_rate", &Commands::roll_rate, "phi_dot [rad/s]")
+      .def_readwrite("yaw_torque", &Commands::yaw_torque, "[N m] (Torque mode)")
+      .def_readwrite("roll_torque", &Commands::roll_torque, "[N m] (Torque mode)")
+      .def_readwrite("yaw_mode", &Commands::yaw_mode)
+      .def_readwrite("roll_mode", &Commands::roll_mode)
+      .def_readwrite("gimbal_enabled", &Commands::gimbal_enabled, "False: AGS off, yaw brake on")
+      .def_readwrite("clutch_engage", &Commands::clutch_engage, "request the roll clutch")
+      .def("validate", &Commands::validate, "Raise ValueError on a non-finite set-point.");
+
+  py::class_<RoverState>(m, "RoverState",
+                         "Sensors and ground truth after the last step (arrays are copies).")
+      .def_readonly("time", &RoverState::time)
+      .def_readonly("position", &RoverState::position, "chassis frame origin, world [m]")
+      .def_readonly("quaternion", &RoverState::quaternion, "(w, x, y, z)")
+      .def_readonly("linear_velocity", &RoverState::linear_velocity, "world [m/s]")
+      .def_readonly("angular_velocity", &RoverState::angular_velocity, "world [rad/s]")
+      .def_readonly("body_linear_velocity", &RoverState::body_linear_velocity, "chassis frame")
+      .def_readonly("body_angular_velocity", &RoverState::body_angular_velocity, "chassis frame")
+      .def_readonly("roll", &RoverState::roll)
+      .def_readonly("pitch", &RoverState::pitch)
+      .def_readonly("yaw", &RoverState::yaw)
+      .def_readonly("gimbal_yaw", &RoverState::gimbal_yaw, "psi [rad]")
+      .def_readonly("gimbal_roll", &RoverState::gimbal_roll, "phi [rad]")
+      .def_readonly("gimbal_yaw_rate", &RoverState::gimbal_yaw_rate)
+      .def_readonly("gimbal_roll_rate", &RoverState::gimbal_roll_rate)
+      .def_readonly("yaw_torque", &RoverState::yaw_torque, "[N m]")
+      .def_readonly("roll_torque", &RoverState::roll_torque, "tau_phi [N m] (reward, eq 38)")
+      .def_readonly("bogie_frame_angle", &RoverState::bogie_frame_angle)
+      .def_readonly("clutch", &RoverState::clutch)
+      .def_property_readonly("wheel_speed", [](const RoverState& s) { return arr(s.wheel_speed); })
+      .def_property_readonly("wheel_torque", [](const RoverState& s) { return arr(s.wheel_torque); })
+      .def_property_readonly("wheel_load", [](const RoverState& s) { return arr(s.wheel_load); })
+      .def_property_readonly("sinkage", [](const RoverState& s) { return arr(s.sinkage); })
+      .def_property_readonly("slip", [](const RoverState& s) { return arr(s.slip); })
+      .def_property_readonly("contact_vx", [](const RoverState& s) { return arr(s.contact_vx); })
+      .def_property_readonly("contact_vy", [](const RoverState& s) { return arr(s.contact_vy); })
+      .def_property_readonly("motor_current", [](const RoverState& s) { return arr(s.motor_current); })
+      .def_property_readonly("motor_power", [](const RoverState& s) { return arr(s.motor_power); })
+      .def_property_readonly(
+          "wheel_position",
+          [](const RoverState& s) {
+            RowMat o(4, 3);
+            for (int i = 0; i < 4; ++i) o.row(i) = s.wheel_position[i].transpose();
+            return o;
+          },
+          "4 x 3 wheel centres, world [m]")
+      .def_property_readonly(
+          "fts",
+          [](const RoverState& s) {
+            RowMat o(4, 6);
+            for (int i = 0; i < 4; ++i) o.row(i) = s.fts[i].transpose();
+            return o;
+          },
+          "4 x 6 wrenches (Fx, Fy, Fz, Tx, Ty, Tz) on the mounts, sensor frames")
+      .def_readonly("energy", &RoverState::energy, "electrical energy [J]");
+
+  py::class_<Snapshot>(m, "Snapshot", "Complete simulation state for RoverSim.restore().")
+      .def_property_readonly("time", [](const Snapshot& s) { return s.state.time; });
+
+  py::class_<RoverSim, std::shared_ptr<RoverSim>>(
+      m, "RoverSim",
+      "ERNEST on ODE: chassis, Active Gimbal Suspension with roll clutch, bogie, four driven "
+      "wheels on Bekker–Wong soil or rigid ground, rigid boxes (seed 004 §2–3).")
+      .def(py::init<const RoverParameters&, const HeightMap&, const std::vector<BoxObstacle>&,
+                    const SimOptions&>(),
+           "params"_a, "terrain"_a, "obstacles"_a = std::vector<BoxObstacle>{},
+           "options"_a = SimOptions{})
+      .def("reset", &RoverSim::reset, "x"_a, "y"_a, "heading"_a, "psi"_a = 0.0, "phi"_a = 0.0,
+           "speed"_a = 0.0,
+           "Place the rover on the terrain at rest (or rolling at speed [m/s]).")
+      .def("set_commands", &RoverSim::set_commands, "commands"_a, "Set actuator set-points.")
+      .def_property_readonly("commands", &RoverSim::commands)
+      .def("step", &RoverSim::step, py::call_guard<py::gil_scoped_release>(),
+           "One physics step; raises SimulationDiverged on a non-finite or absurd state.")
+      .def("step_n", &RoverSim::step_n, "n"_a, py::call_guard<py::gil_scoped_release>(),
+           "n physics steps without returning to Python.")
+      .def_property_readonly("state", &RoverSim::state, py::return_value_policy::copy,
+                             "RoverState after the last step (a copy).")
+      .def(
+          "observation",
+          [](const RoverSim& s) {
+            py::array_t<double> o(RoverSim::kObservationSize);
+            s.observation(o.mutable_data());
+            return o;
+          },
+          "Flat observation vector; names in observation_names().")
+      .def_static("observation_names", &RoverSim::observation_names)
+      .def("snapshot", &RoverSim::snapshot, "Full state; restore() reproduces runs bit for bit.")
+      .def("restore", &RoverSim::restore, "snapshot"_a)
+      .def("apply_chassis_force", &RoverSim::apply_chassis_force, "force"_a,
+           "External force [N] on the chassis during the next step only.")
+      .def("kinetic_energy", &RoverSim::kinetic_energy)
+      .def("potential_energy", &RoverSim::potential_energy)
+      .def_property_readonly("friction", &RoverSim::friction)
+      .def_property_readonly("parameters", &RoverSim::parameters)
+      .def_property_readonly("options", &RoverSim::options)
+      .def_property_readonly("terrain", &RoverSim::terrain);
+  m.attr("OBSERVATION_SIZE") = RoverSim::kObservationSize;
+  m.attr("COMMAND_SIZE") = RoverSim::kCommandSize;
+
+  py::class_<BatchStepper>(m, "BatchStepper",
+                           "N independent rovers stepped on a thread pool; one call per batch "
+                           "step, GIL released, numpy in and out.")
+      .def(py::init<std::vector<std::shared_ptr<RoverSim>>, int>(), "sims"_a, "threads"_a = 1)
+      .def(
+          "step",
+          [](BatchStepper& b, py::object commands, int n_steps) {
+            const py::ssize_t n = b.size();
+            py::array_t<double, py::array::c_style | py::array::forcecast> cmd;
+            const double* cptr = nullptr;
+            if (!commands.is_none()) {
+              cmd = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(commands);
+              if (!cmd || cmd.ndim() != 2 || cmd.shape(0) != n ||
+                  cmd.shape(1) != RoverSim::kCommandSize)
+                throw py::value_error("BatchStepper.step: commands must have shape (" +
+                                      std::to_string(n) + ", " +
+                                      std::to_string(RoverSim::kCommandSize) + ")");
+              cptr = cmd.data();
+            }
+            py::array_t<double> obs({n, static_cast<py::ssize_t>(RoverSim::kObservationSize)});
+            double* optr = obs.mutable_data();
+            {
+              py::gil_scoped_release release;
+              b.step(cptr, n_steps, optr);
+            }
+            return obs;
+          },
+          "commands"_a, "n_steps"_a = 1,
+          "commands: (N, 8) rows (w_FL, w_FR, w_RL, w_RR, psi_dot, phi_dot, gimbal_enabled, "
+          "clutch_engage) or None to keep them; steps every rover n_steps times; returns the "
+          "(N, OBSERVATION_SIZE) observations.")
+      .def_property_readonly("size", &BatchStepper::size)
+      .def_property_readonly("threads", &BatchStepper::threads)
+      .def("sim", &BatchStepper::sim_ptr, "i"_a, "The i-th RoverSim.");
+
+  py::class_<WheelSyncResult>(m, "WheelSyncResult", "Solution of eqs 4–10.")
+      .def_readonly("x", &WheelSyncResult::x, "eq 5 (Vy, Vz, wz, v1x, v1z, ..., v4x, v4z)")
+      .def_property_readonly("wheel_speeds", [](const WheelSyncResult& r) { return arr(r.wheel_speeds); },
+                             "eq 10 [rad/s], FL, FR, RL, RR")
+      .def_readonly("residual", &WheelSyncResult::residual, "||A x - y||")
+      .def_readonly("A", &WheelSyncResult::A, "eq 6")
+      .def_readonly("y", &WheelSyncResult::y, "eq 8");
+  m.def("wheel_jacobian", &wheel_jacobian, "p"_a, "psi"_a, "phi"_a, "wheel"_a,
+        "3 x 8 Jacobian J_i of eqs 1–2 (wheel frame; q_dot of eq 3).");
+  m.def("synchronise_wheels", &synchronise_wheels, "p"_a, "psi"_a, "phi"_a, "vx"_a, "wx"_a,
+        "wy"_a, "psi_dot"_a, "phi_dot"_a,
+        "Wheel synchroniser of §2.3: wheel speeds (eq 10) from (Vx, wx, wy, psi_dot, phi_dot) "
+        "at gimbal angles (psi, phi), with x = A^+ y (eq 9).");
+}
+
+}  // namespace ernest::bindings

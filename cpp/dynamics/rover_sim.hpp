@@ -1,0 +1,180 @@
+// ERNEST multibody simulation on ODE (replaces the DARTS simulation of seed 004 §3): chassis with
+// rear wheel assemblies, Active Gimbal Suspension (yaw then roll, collocated, §2.2) with roll
+// clutch and yaw brake, front bogie with its wheel assemblies, four driven wheels; Bekker–Wong
+// soft soil on a height map (§3.3) or rigid ground, rigid box obstacles (§3.4); DC motors with
+// gearboxes (eq 40); force–torque sensors; snapshot/restore; divergence detection.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ernest/dynamics/rover_parameters.hpp"
+#include "ernest/dynamics/terrain.hpp"
+#include "ernest/soil/bekker_wong.hpp"
+#include "ernest/soil/rigid_contact.hpp"
+#include "ernest/soil/soil_parameters.hpp"
+
+namespace ernest::dynamics {
+
+/// Raised when the state becomes non-finite or absurd (see SimOptions::max_speed). The simulation
+/// refuses to step again until restore() or reset().
+class SimulationDiverged : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SimOptions {
+  /// Physics step [s]. Default from the step-size study in benchmarks/RESULTS.md ("dynamics").
+  double dt = 0.02;
+  std::uint64_t seed = 0;                 ///< seeds the friction draws (std::mt19937_64)
+  GroundType ground = GroundType::Soil;   ///< soft soil or rigid ground on the whole height map
+  soil::SoilParameters soil{};            ///< Bekker–Wong parameters (default M90, Table 2)
+  /// Gauss–Legendre points per panel of the soil model.
+  int soil_points_per_panel = soil::BekkerWongModel::kDefaultPointsPerPanel;
+  /// One-sided normal damping of the soil [N s/m per wheel] (assumption, ours: Bekker–Wong has no
+  /// rate term, so a wheel would bounce forever on the pressure–sinkage spring; it resists only
+  /// sinking, like plastic soil, and is solved implicitly by ODE).
+  double soil_normal_damping = 1500.0;
+  soil::RigidContactParameters rigid{};   ///< §3.4 spring–damper -> ODE ERP/CFM for dt
+  /// Coulomb friction of the obstacles and of rigid ground; < 0 draws it once from
+  /// rigid.sample_friction(rng(seed)) ("per obstacle set").
+  double friction = -1.0;
+  /// Tangential compliance of the tyre on rigid surfaces [(m/s)/N] (assumption, ours): ODE's
+  /// force-dependent slip, so that wheels with slightly different rolling radii do not fight
+  /// each other through perfectly sticking contacts. 1e-4 = 1 cm/s of creep at 100 N.
+  double rigid_slip = 1e-4;
+  double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
+  double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
+  void validate() const;
+};
+
+enum class ActuatorMode : int { Velocity = 0, Torque = 1, Off = 2 };
+enum class ClutchState : int { Disengaged = 0, Aligning = 1, Engaged = 2 };
+
+/// Actuator set-points, held until changed. Velocity mode = the servo drive's velocity loop,
+/// modelled as ideal up to the current-limited torque (N eta K_tau I_max).
+struct Commands {
+  std::array<double, 4> wheel_speed{};    ///< [rad/s], positive rolls forward (Velocity mode)
+  std::array<double, 4> wheel_torque{};   ///< [N m] output torque (Torque mode), clamped
+  ActuatorMode wheel_mode = ActuatorMode::Velocity;
+  double yaw_rate = 0.0, roll_rate = 0.0;      ///< gimbal psi_dot, phi_dot [rad/s]
+  double yaw_torque = 0.0, roll_torque = 0.0;  ///< Torque mode [N m], clamped
+  ActuatorMode yaw_mode = ActuatorMode::Velocity;
+  ActuatorMode roll_mode = ActuatorMode::Velocity;
+  /// false = AGS off: the yaw brake holds, the roll actuator is braked (passive bogie, §5 Table 6).
+  bool gimbal_enabled = true;
+  /// Request the roll clutch: the bogie frame first aligns with the bogie at bounded speed, then
+  /// the pins engage (§2.2). false retracts the pins at once (bogie free on its bearing).
+  bool clutch_engage = false;
+  void validate() const;
+};
+
+using Wrench = Eigen::Matrix<double, 6, 1>;
+
+/// Sensors and ground truth after the last step. Actuator arrays of six: FL, FR, RL, RR wheels,
+/// yaw, roll.
+struct RoverState {
+  double time = 0.0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();         ///< chassis frame origin, world
+  Eigen::Vector4d quaternion{1.0, 0.0, 0.0, 0.0};              ///< chassis (w, x, y, z)
+  Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();   ///< of the origin, world
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< world
+  Eigen::Vector3d body_linear_velocity = Eigen::Vector3d::Zero();   ///< chassis frame
+  Eigen::Vector3d body_angular_velocity = Eigen::Vector3d::Zero();  ///< chassis frame
+  double roll = 0.0, pitch = 0.0, yaw = 0.0;  ///< chassis Z-Y-X Euler angles [rad]
+  double gimbal_yaw = 0.0, gimbal_roll = 0.0;            ///< psi, phi [rad]
+  double gimbal_yaw_rate = 0.0, gimbal_roll_rate = 0.0;  ///< [rad/s]
+  double yaw_torque = 0.0, roll_torque = 0.0;  ///< actuator (or brake) torque on the bogie [N m]
+  double bogie_frame_angle = 0.0;              ///< roll actuator output angle [rad]
+  ClutchState clutch = ClutchState::Disengaged;
+  std::array<double, 4> wheel_speed{};   ///< spin relative to the mount [rad/s]
+  std::array<double, 4> wheel_torque{};  ///< drive output torque [N m]
+  std::array<double, 4> wheel_load{};    ///< ground normal force on the wheel [N]
+  std::array<double, 4> sinkage{};       ///< penetration of the reference contact point [m]
+  std::array<double, 4> slip{};          ///< eq 12 slip (soil) [-]
+  std::array<double, 4> contact_vx{};    ///< v_c,x of the contact point (Fig. 7 frame) [m/s]
+  std::array<double, 4> contact_vy{};    ///< v_c,y lateral slip velocity [m/s]
+  std::array<Eigen::Vector3d, 4> wheel_position{};  ///< wheel centres, world
+  /// Force–torque sensors: wrench (Fx, Fy, Fz, Tx, Ty, Tz) exerted by the wheel assembly on its
+  /// mount at the sensor point, in the sensor frame (Fz > 0 when the wheel carries load).
+  std::array<Wrench, 4> fts{};
+  std::array<double, 6> motor_current{};  ///< [A]
+  std::array<double, 6> motor_power{};    ///< eq 40 [W]
+  double energy = 0.0;  ///< integral of the positive electrical power of all six actuators [J]
+};
+
+/// Complete simulation state; restore() reproduces the run bit for bit.
+struct Snapshot {
+  struct Body {
+    std::array<double, 3> pos{}, lin{}, ang{};
+    std::array<double, 4> quat{};
+  };
+  std::array<Body, 6> bodies{};
+  RoverState state{};
+  Commands commands{};
+  std::array<double, 4> shear_x{}, shear_y{};  // implicit shear levels of the last step
+  std::array<double, 4> compaction{};          // implicit compaction force of the last step
+  bool valid = false;
+};
+
+class RoverSim {
+ public:
+  static constexpr int kObservationSize = 65;
+  static constexpr int kCommandSize = 8;
+
+  RoverSim(const RoverParameters& params, const HeightMap& terrain,
+           const std::vector<BoxObstacle>& obstacles = {}, const SimOptions& options = {});
+  ~RoverSim();
+  RoverSim(const RoverSim&) = delete;
+  RoverSim& operator=(const RoverSim&) = delete;
+
+  /// Place the rover at rest at (x, y) with heading [rad], the chassis tilted to the terrain
+  /// under the wheels and lowered until the deepest wheel just touches; gimbal at (psi, phi).
+  /// speed [m/s] gives a rolling start: every body moves forward at it and the wheels spin at
+  /// speed / r (on soft soil eq 12's regularisation makes a standing start very hard).
+  void reset(double x, double y, double heading, double psi = 0.0, double phi = 0.0,
+             double speed = 0.0);
+
+  void set_commands(const Commands& commands);
+  const Commands& commands() const;
+  /// Batch form: (w_FL, w_FR, w_RL, w_RR, psi_dot, phi_dot, gimbal_enabled, clutch_engage),
+  /// velocity mode for all actuators.
+  void set_command_vector(const double* c);
+
+  /// Advance one physics step; throws SimulationDiverged on a non-finite or absurd state.
+  void step();
+  void step_n(int n);
+
+  const RoverState& state() const;
+  /// Fixed layout of kObservationSize values; names from observation_names().
+  void observation(double* out) const;
+  static std::vector<std::string> observation_names();
+
+  Snapshot snapshot() const;
+  void restore(const Snapshot& s);
+
+  /// Test/scenario hook: an external force [N] on the chassis at its CoM during the next step only.
+  void apply_chassis_force(const Eigen::Vector3d& force);
+
+  /// Kinetic energy of all bodies [J] and potential energy m g z [J] (world frame, z up).
+  double kinetic_energy() const;
+  double potential_energy() const;
+  /// Friction coefficient in use for obstacles and rigid ground.
+  double friction() const;
+
+  const RoverParameters& parameters() const;
+  const SimOptions& options() const;
+  const HeightMap& terrain() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ernest::dynamics

@@ -1,0 +1,123 @@
+"""ERNEST rover dynamics on ODE (seed 004 §2–3): multibody model with the Active Gimbal Suspension,
+roll clutch, Bekker–Wong soft soil and rigid contact, DC motors (eq 40), force–torque sensors,
+snapshot/restore, divergence detection, a batched multi-threaded stepper, and the Jacobian wheel
+synchroniser of §2.3 (eqs 1–10).
+
+The simulator is C++ (``ernest_cpp._core.dynamics``); this module re-exports it and adds
+conveniences for building scenarios.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from . import soil as _soil
+from ._core.dynamics import (  # noqa: F401  (re-exports)
+    COMMAND_SIZE,
+    OBSERVATION_SIZE,
+    ActuatorMode,
+    BatchStepper,
+    BoxObstacle,
+    ClutchState,
+    Commands,
+    GroundType,
+    HeightMap,
+    MotorElectrical,
+    MotorParameters,
+    RoverParameters,
+    RoverSim,
+    RoverState,
+    SimOptions,
+    SimulationDiverged,
+    Snapshot,
+    WheelSyncResult,
+    motor_electrical,
+    synchronise_wheels,
+    wheel_jacobian,
+)
+
+#: Wheel order of every per-wheel array.
+WHEELS = ("FL", "FR", "RL", "RR")
+#: Names of the columns of RoverSim.observation() and BatchStepper.step().
+OBSERVATION_NAMES = tuple(RoverSim.observation_names())
+#: Columns of BatchStepper commands.
+COMMAND_NAMES = ("w_FL", "w_FR", "w_RL", "w_RR", "yaw_rate", "roll_rate", "gimbal_enabled",
+                 "clutch_engage")
+
+
+def make_options(ground: str = "soil", soil: str | _soil.SoilParameters = "m90",
+                 dt: float | None = None, seed: int = 0,
+                 friction: float | None = None) -> SimOptions:
+    """SimOptions for ``ground`` ('soil' or 'rigid'), a soil preset name or SoilParameters, the
+    physics step (default: the study's), the seed and the Coulomb friction (None: drawn)."""
+    o = SimOptions()
+    if ground not in ("soil", "rigid"):
+        raise ValueError(f"ground must be 'soil' or 'rigid', got {ground!r}")
+    o.ground = GroundType.Soil if ground == "soil" else GroundType.Rigid
+    o.soil = _soil.soil_preset(soil) if isinstance(soil, str) else soil
+    if dt is not None:
+        o.dt = float(dt)
+    o.seed = int(seed)
+    if friction is not None:
+        o.friction = float(friction)
+    o.validate()
+    return o
+
+
+def rock_field(n: int = 20, seed: int = 0, length: float = 6.0, width: float = 2.0,
+               x0: float = 0.8, size: tuple[float, float] = (0.06, 0.16)) -> list[BoxObstacle]:
+    """n box 'rocks' with random sizes and yaws in [x0, x0 + length] x [-width/2, width/2],
+    half buried in flat ground at z = 0 (seeded, reproducible)."""
+    rng = np.random.default_rng(seed)
+    rocks = []
+    for _ in range(int(n)):
+        s = rng.uniform(size[0], size[1], 3)
+        c = (x0 + rng.uniform(0.0, length), rng.uniform(-width / 2, width / 2), 0.25 * s[2])
+        rocks.append(BoxObstacle(np.array(c), s, float(rng.uniform(0, math.pi)), 0.0, 0.0))
+    return rocks
+
+
+def make_sim(ground: str = "soil", terrain: HeightMap | None = None,
+             obstacles: Iterable[BoxObstacle] = (), params: RoverParameters | None = None,
+             options: SimOptions | None = None, **option_kwargs) -> RoverSim:
+    """A RoverSim on ``terrain`` (default: 40 m x 20 m flat ground around the origin)."""
+    terrain = terrain or HeightMap.flat(40.0, 20.0, 0.25, 0.0, -10.0, -10.0)
+    options = options or make_options(ground, **option_kwargs)
+    return RoverSim(params or RoverParameters(), terrain, list(obstacles), options)
+
+
+def sync_commands(sim: RoverSim, vx: float, yaw_rate: float = 0.0, roll_rate: float = 0.0,
+                  gimbal_enabled: bool = True, clutch_engage: bool = False) -> Commands:
+    """Commands with wheel speeds from the wheel synchroniser (§2.3) at the current state."""
+    s = sim.state
+    w = synchronise_wheels(sim.parameters, s.gimbal_yaw, s.gimbal_roll, vx,
+                           s.body_angular_velocity[0], s.body_angular_velocity[1], yaw_rate,
+                           roll_rate)
+    c = Commands()
+    c.wheel_speed = list(w.wheel_speeds)
+    c.yaw_rate = yaw_rate
+    c.roll_rate = roll_rate
+    c.gimbal_enabled = gimbal_enabled
+    c.clutch_engage = clutch_engage
+    return c
+
+
+def command_array(rows: Sequence[Sequence[float]]) -> np.ndarray:
+    """(N, COMMAND_SIZE) float64 array for BatchStepper.step, checked."""
+    a = np.ascontiguousarray(rows, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != COMMAND_SIZE:
+        raise ValueError(f"commands must have shape (N, {COMMAND_SIZE}), got {a.shape}")
+    return a
+
+
+__all__ = [
+    "COMMAND_NAMES", "COMMAND_SIZE", "OBSERVATION_NAMES", "OBSERVATION_SIZE", "WHEELS",
+    "ActuatorMode", "BatchStepper", "BoxObstacle", "ClutchState", "Commands", "GroundType",
+    "HeightMap", "MotorElectrical", "MotorParameters", "RoverParameters", "RoverSim", "RoverState",
+    "SimOptions", "SimulationDiverged", "Snapshot", "WheelSyncResult", "command_array",
+    "make_options", "make_sim", "motor_electrical", "rock_field", "sync_commands",
+    "synchronise_wheels", "wheel_jacobian",
+]

@@ -1,0 +1,148 @@
+"""Python-level tests of ernest_cpp.dynamics: bindings, numpy interfaces, batch stepping, errors."""
+
+import math
+import threading
+
+import numpy as np
+import pytest
+
+from ernest_cpp import dynamics as D
+
+
+def rigid_sim(**kw):
+    return D.make_sim("rigid", friction=0.8, **kw)
+
+
+def test_static_loads_sum_to_weight_and_fts_shapes():
+    sim = rigid_sim()
+    c = D.Commands()
+    c.gimbal_enabled = False
+    sim.set_commands(c)
+    sim.step_n(100)
+    s = sim.state
+    m = sim.parameters.total_mass()
+    assert s.wheel_load.shape == (4,)
+    assert abs(s.wheel_load.sum() - m * 9.81) < 0.005 * m * 9.81
+    assert s.fts.shape == (4, 6)
+    # Each sensor carries its wheel's load minus the assembly's own weight below the sensor.
+    wa = sim.parameters.wheel_assembly_mass
+    np.testing.assert_allclose(s.fts[:, 2], s.wheel_load - wa * 9.81, rtol=0.01)
+
+
+def test_observation_layout_matches_state():
+    sim = rigid_sim()
+    sim.step_n(5)
+    o = sim.observation()
+    names = D.OBSERVATION_NAMES
+    assert o.shape == (D.OBSERVATION_SIZE,) == (len(names),)
+    s = sim.state
+    assert o[names.index("time")] == pytest.approx(s.time)
+    assert o[names.index("wheel_load_RR")] == pytest.approx(s.wheel_load[3])
+    assert o[names.index("fts_FR_Fz")] == pytest.approx(s.fts[1, 2])
+
+
+def test_synchroniser_straight_and_consistent():
+    p = D.RoverParameters()
+    r = D.synchronise_wheels(p, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 0.0)
+    np.testing.assert_allclose(r.wheel_speeds, 0.2 / p.wheel_radius, rtol=1e-12)
+    assert r.A.shape == (12, 11) and r.x.shape == (11,)
+    t = D.synchronise_wheels(p, 0.4, 0.0, 0.1, 0.0, 0.0, 0.1, 0.0)
+    assert t.residual < 1e-10
+    np.testing.assert_allclose(t.A @ t.x, t.y, atol=1e-12)
+
+
+def test_batch_matches_single_rover_runs_and_threads():
+    def make(seed):
+        sim = D.make_sim("soil", obstacles=D.rock_field(6, seed=seed), seed=seed)
+        sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.15)
+        return sim
+
+    cmds = D.command_array([[1.0, 1.0, 1.0, 1.0, 0.1 * k, 0.0, 1.0, 0.0] for k in range(3)])
+    solo = []
+    for k in range(3):
+        sim = make(k)
+        c = D.Commands()
+        c.wheel_speed = list(cmds[k, :4])
+        c.yaw_rate = cmds[k, 4]
+        sim.set_commands(c)
+        sim.step_n(20)
+        solo.append(sim.observation())
+    for threads in (1, 2):
+        batch = D.BatchStepper([make(k) for k in range(3)], threads)
+        obs = None
+        for _ in range(4):
+            obs = batch.step(cmds, 5)
+        assert obs.shape == (3, D.OBSERVATION_SIZE)
+        np.testing.assert_array_equal(obs, np.array(solo))  # bit-identical, any thread count
+
+
+def test_batch_releases_the_gil():
+    batch = D.BatchStepper([D.make_sim("soil") for _ in range(2)], 2)
+    ticks = []
+    stop = threading.Event()
+
+    def ticker():
+        while not stop.is_set():
+            ticks.append(1)
+
+    t = threading.Thread(target=ticker)
+    t.start()
+    batch.step(None, 400)
+    stop.set()
+    t.join()
+    assert len(ticks) > 10  # the Python thread ran while C++ stepped
+
+
+def test_snapshot_restore_exact():
+    sim = D.make_sim("soil", obstacles=D.rock_field(5, seed=3))
+    sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.15)
+    c = D.Commands()
+    c.wheel_speed = [1.0, 1.1, 1.0, 0.9]
+    c.yaw_rate = 0.1
+    sim.set_commands(c)
+    sim.step_n(30)
+    snap = sim.snapshot()
+    sim.step_n(50)
+    a = sim.observation()
+    sim.restore(snap)
+    assert sim.state.time == pytest.approx(snap.time)
+    sim.step_n(50)
+    np.testing.assert_array_equal(sim.observation(), a)
+
+
+def test_divergence_raises_python_exception():
+    sim = rigid_sim()
+    sim.step_n(2)
+    sim.apply_chassis_force(np.array([0.0, 0.0, 1e9]))
+    with pytest.raises(D.SimulationDiverged, match="chassis"):
+        sim.step()
+    assert issubclass(D.SimulationDiverged, RuntimeError)
+    batch = D.BatchStepper([rigid_sim(), rigid_sim()], 2)
+    batch.sim(1).apply_chassis_force(np.array([0.0, 0.0, 1e9]))
+    with pytest.raises(D.SimulationDiverged, match="rover 1"):
+        batch.step(None, 1)
+
+
+def test_invalid_inputs_raise_value_error():
+    p = D.RoverParameters()
+    p.track = -1.0
+    with pytest.raises(ValueError, match="track"):
+        D.RoverSim(p, D.HeightMap.flat(4, 4, 0.5))
+    with pytest.raises(ValueError, match="ground"):
+        D.make_options("ice")
+    sim = rigid_sim()
+    c = D.Commands()
+    c.roll_rate = math.nan
+    with pytest.raises(ValueError, match="roll_rate"):
+        sim.set_commands(c)
+    batch = D.BatchStepper([sim], 1)
+    with pytest.raises(ValueError, match="shape"):
+        batch.step(np.zeros((2, D.COMMAND_SIZE)), 1)
+
+
+def test_motor_power_eq40():
+    m = D.MotorParameters()
+    e = D.motor_electrical(m, 10.0, 2.0)
+    i = 10.0 / (m.gear_ratio * m.efficiency * m.torque_constant)
+    assert e.current == pytest.approx(i)
+    assert e.power == pytest.approx(i * (m.resistance * i + m.torque_constant * m.gear_ratio * 2.0))
