@@ -330,7 +330,8 @@ def test_td3_learns_point_mass(tmp_path):
 
 def test_resume_gives_the_same_updates(tmp_path):
     over = {"env.num_envs": 2, "td3.hidden": 32, "total_steps": 800, "random_steps": 100,
-            "learning_starts": 100, "checkpoint.every_steps": 400, "eval.every_steps": 0}
+            "learning_starts": 100, "checkpoint.every_steps": 400, "eval.every_steps": 400,
+            "eval.episodes": 2}
     cfg = small_cfg(**over)
     full = Trainer(cfg, str(tmp_path / "full"))
     full.train()
@@ -339,9 +340,14 @@ def test_resume_gives_the_same_updates(tmp_path):
     part.close()
     with pytest.raises(ValueError, match="--resume"):
         Trainer(cfg, str(tmp_path / "part"))
+    with open(tmp_path / "part" / "eval.csv", "a") as fh:  # as if killed after a later evaluation
+        fh.write("10,-1,-1,0,600\n")
     resumed = Trainer(cfg, str(tmp_path / "part"), resume=True)
     assert resumed.step == 400
     resumed.train()
+    for run in ("full", "part"):  # one evaluation row per evaluation step, none duplicated
+        rows = open(tmp_path / run / "eval.csv").read().splitlines()
+        assert [float(r.split(",")[-1]) for r in rows[1:]] == [400, 800]
     assert full.agent.updates == resumed.agent.updates == 800 - 100 + 2
     sd_a, sd_b = full.agent.state_dict(), resumed.agent.state_dict()
     for net in ("actor", "critic", "actor_target", "critic_target"):
@@ -467,8 +473,7 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "layout ernest-obs-v1" in out and "FTS noise on 24 components" in out
     assert os.path.isdir(os.path.join(run, "tb"))  # TensorBoard logs
-    assert cli.main(["train", "--env", POINT_MASS, "--run-dir", run, "--resume",
-                     "--steps", "400"]) == 0
+    assert cli.main(["train", "--run-dir", run, "--resume", "--steps", "400"]) == 0
     assert load_checkpoint(run, with_buffer=False)["state"]["step"] == 400
     assert cli.main(["export", run, "--out", str(tmp_path / "p.pt")]) == 0
     _, meta = load_policy(str(tmp_path / "p.pt"))

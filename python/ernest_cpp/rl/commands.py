@@ -30,30 +30,34 @@ def _train(args) -> int:
     from .trainer import Trainer, resolve_env_id
 
     extra: dict = {}
-    if args.env or args.scenario:
+    if args.env:
+        extra["env"] = {"id": args.env, "scenario": None}
+    if args.scenario:
         extra["env"] = {"id": args.env, "scenario": args.scenario}
     if args.seed is not None:
         extra["seed"] = args.seed
     if args.steps is not None:
         extra["total_steps"] = args.steps
-    cfg = _build(args, extra)
-    if args.resume and not args.run_dir:
-        raise ValueError("--resume needs --run-dir")
+    if args.resume:
+        # The run's saved settings, changed only by what this command line gives explicitly.
+        from .config import merge, parse_assignment
+        from .trainer import load_checkpoint
+
+        if not args.run_dir:
+            raise ValueError("--resume needs --run-dir")
+        if args.config:
+            raise ValueError("--resume continues with the run's saved settings; use --set to "
+                             "change one")
+        cfg = load_checkpoint(args.run_dir, with_buffer=False)["state"]["config"]
+        if extra:
+            cfg = merge(cfg, extra)
+        for o in args.set:
+            cfg = merge(cfg, parse_assignment(o))
+    else:
+        cfg = _build(args, extra)
     env_id = resolve_env_id(cfg["env"])
     run_dir = args.run_dir or os.path.join(
         "runs", f"{re.sub(r'[^A-Za-z0-9_.-]+', '_', env_id)}-seed{cfg['seed']}")
-    if args.resume:
-        from .trainer import load_checkpoint
-
-        saved = load_checkpoint(run_dir, with_buffer=False)["state"]["config"]
-        # The saved settings win except for what this command line changes explicitly.
-        from .config import merge
-
-        cfg = merge(saved, extra) if extra else saved
-        for o in args.set:
-            from .config import parse_assignment
-
-            cfg = merge(cfg, parse_assignment(o))
     tr = Trainer(cfg, run_dir, resume=args.resume)
     print(f"training on {env_id} ({tr.n} simulations, obs {tr.obs_dim}, act {tr.act_dim}, layout "
           f"{tr.layout.version}, FTS noise on {tr.buffer.noise_idx.size} components) -> {run_dir}")

@@ -99,8 +99,9 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
         torch.save(agent.state_dict(), os.path.join(tmp, "agent.pt"))
         with open(os.path.join(tmp, "state.json"), "w") as fh:
             json.dump(state, fh)
-    with open(os.path.join(ck_root, "LATEST"), "w") as fh:
+    with open(os.path.join(ck_root, "LATEST.tmp"), "w") as fh:
         fh.write("consolidated\n")
+    os.replace(os.path.join(ck_root, "LATEST.tmp"), os.path.join(ck_root, "LATEST"))
     result = {"checkpoint": os.path.join(ck_root, "consolidated"), "info": info, "table": []}
     if evaluate_policies:
         result["table"] = evaluation_table(agent, specialists, cfg, out_dir, log)

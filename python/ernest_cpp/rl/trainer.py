@@ -336,7 +336,25 @@ class Trainer:
         self.exploration.load_state_dict(st["exploration"])
         self.recent.extend(st["recent"])
         self.last_eval = st.get("last_eval", {})
+        self._trim_eval_log()
         self.log(f"resumed {ck['path']} at step {self.step} ({self.agent.updates} updates)")
+
+    def _trim_eval_log(self) -> None:
+        """Drop evaluation rows written after the checkpoint we resume from (they will be redone)."""
+        path = os.path.join(self.run_dir, "eval.csv")
+        if not os.path.exists(path):
+            return
+        with open(path) as fh:
+            lines = fh.read().splitlines()
+        if not lines:
+            return
+        col = lines[0].split(",").index("step") if "step" in lines[0].split(",") else None
+        if col is None:
+            return
+        keep = [lines[0]] + [ln for ln in lines[1:] if float(ln.split(",")[col]) <= self.step]
+        with open(path + ".tmp", "w") as fh:
+            fh.write("\n".join(keep) + "\n")
+        os.replace(path + ".tmp", path)
 
     # ------------------------------------------------------------------ loop
     def _policy(self, obs: np.ndarray) -> np.ndarray:
