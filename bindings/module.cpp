@@ -10,6 +10,9 @@ PYBIND11_MODULE(_core, m) {
   auto dynamics = m.def_submodule(
       "dynamics", "ERNEST multibody dynamics on ODE, wheel synchroniser (seed 004 §2–3)");
   ernest::bindings::bind_dynamics(dynamics);
+  auto envs = m.def_submodule(
+      "envs", "Scenarios (seed 004 §4.5), the episode core and the batched environment");
+  ernest::bindings::bind_envs(envs);
   auto opt = m.def_submodule("opt", "Asterix gait transitions with NLopt SLSQP (seed 000)");
   ernest::bindings::bind_opt(opt);
   auto sensing = m.def_submodule(

@@ -38,6 +38,7 @@ void bind_sensing(py::module_& m) {
   m.attr("ACTION_SIZE") = kActionSize;
   m.attr("OBSERVATION_LAYOUT_VERSION") = kObservationLayoutVersion;
   m.attr("ELEVATION_SAMPLES") = kElevationSamples;
+  m.attr("OBSERVATION_CLIP") = kObservationClip;
   py::dict index;
   index["heading_deviation"] = static_cast<int>(kHeadingDeviation);
   index["lateral_deviation"] = static_cast<int>(kLateralDeviation);

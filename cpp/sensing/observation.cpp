@@ -48,7 +48,7 @@ ObservationVector build_observation(const ObservationInputs& in, const Observati
       require(std::isfinite(raw[i]), "build_observation: input '" + names[i] + "' is not finite");
     }
   }
-  return raw.cwiseQuotient(scales.divisors());
+  return raw.cwiseQuotient(scales.divisors()).cwiseMax(-kObservationClip).cwiseMin(kObservationClip);
 }
 
 std::vector<std::string> observation_names() {

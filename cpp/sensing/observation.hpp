@@ -62,7 +62,11 @@ struct ObservationScales {
   ObservationVector divisors() const;
 };
 
-/// obs = inputs / scales in the §4.2 order. Throws std::invalid_argument on non-finite input.
+/// Observations are clipped to +-kObservationClip (ten times the maximum expected value) so that
+/// the policy's input space is bounded; nothing physical reaches that.
+inline constexpr double kObservationClip = 10.0;
+
+/// obs = clip(inputs / scales) in the §4.2 order. Throws std::invalid_argument on non-finite input.
 ObservationVector build_observation(const ObservationInputs& inputs,
                                     const ObservationScales& scales = {});
 

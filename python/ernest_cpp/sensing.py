@@ -5,6 +5,7 @@
 from ._core.sensing import (  # noqa: F401  (re-exports)
     ACTION_SIZE,
     ELEVATION_SAMPLES,
+    OBSERVATION_CLIP,
     OBSERVATION_INDEX,
     OBSERVATION_LAYOUT_VERSION,
     OBSERVATION_SIZE,

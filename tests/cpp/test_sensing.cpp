@@ -189,6 +189,8 @@ TEST(Observation, LayoutScalingAndNames) {
   EXPECT_DOUBLE_EQ(o[kFtsBegin + 18 + 5], -0.5);
   EXPECT_DOUBLE_EQ(o[kElevationBegin + 4], 0.5);
   EXPECT_DOUBLE_EQ(o[kActionBegin + 1], -0.5);
+  in.elevation[5] = 100.0;  // absurd: clipped to ten times the maximum expected value
+  EXPECT_DOUBLE_EQ(build_observation(in)[kElevationBegin + 5], kObservationClip);
   in.elevation[7] = NAN;
   EXPECT_NE(message_of([&] { build_observation(in); }).find("elev_RL_1"), std::string::npos);
 }

@@ -1,0 +1,235 @@
+// Python bindings of cpp/envs: scenarios, the episode core RoverEnv and the batched VecRoverEnv.
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "ernest/envs/rover_env.hpp"
+#include "ernest/envs/scenarios.hpp"
+#include "ernest/envs/vec_env.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace ernest::bindings {
+
+using namespace ernest::envs;
+
+namespace {
+py::dict result_info(const StepResult& r) {
+  py::dict d;
+  d["progress"] = r.reward.progress;
+  d["lateral_deviation"] = r.reward.lateral;
+  d["reward_progress"] = r.reward.progress_term;
+  d["reward_lateral"] = r.reward.lateral_term;
+  d["reward_torque"] = r.reward.torque_term;
+  d["diverged"] = r.diverged;
+  d["message"] = r.message;
+  return d;
+}
+
+py::dict metrics_dict(const EpisodeMetrics& m, double mass) {
+  py::dict d;
+  d["time"] = m.time;
+  d["progress"] = m.progress;
+  d["expected_progress"] = m.expected_progress;
+  d["distance"] = m.distance;
+  d["energy"] = m.energy;
+  d["mean_abs_roll_torque"] = m.mean_abs_roll_torque;
+  d["travel_reduction"] = m.travel_reduction();
+  d["cost_of_transport"] = m.cost_of_transport(mass);
+  return d;
+}
+
+// Obstacles as rows (cx, cy, cz, lx, ly, lz, yaw, pitch, roll) for numpy users and plots.
+Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> obstacle_rows(const Scenario& s) {
+  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> o(s.obstacles.size(), 9);
+  for (size_t i = 0; i < s.obstacles.size(); ++i) {
+    const auto& b = s.obstacles[i];
+    o.row(i) << b.centre.x(), b.centre.y(), b.centre.z(), b.size.x(), b.size.y(), b.size.z(), b.yaw,
+        b.pitch, b.roll;
+  }
+  return o;
+}
+}  // namespace
+
+void bind_envs(py::module_& m) {
+  py::class_<ScenarioOptions>(m, "ScenarioOptions", "Scenario generation settings (§4.5, Table 3).")
+      .def(py::init<>())
+      .def_property("kind", [](const ScenarioOptions& o) { return scenario_name(o.kind); },
+                    [](ScenarioOptions& o, const std::string& n) { o.kind = scenario_kind(n); },
+                    "scenario name (see scenario_names())")
+      .def_readwrite("grid_spacing", &ScenarioOptions::grid_spacing, "[m]")
+      .def_readwrite("noise_unit", &ScenarioOptions::noise_unit,
+                     "metres per Table 3 noise-amplitude unit (ours: 0.1)")
+      .def_readwrite("p_instance", &ScenarioOptions::p_instance)
+      .def_readwrite("max_rock_density", &ScenarioOptions::max_rock_density, "[1/m^2]")
+      .def_readwrite("clear_radius", &ScenarioOptions::clear_radius, "[m]")
+      .def_readwrite("eval_slope_deg", &ScenarioOptions::eval_slope_deg, "[deg]")
+      .def("validate", &ScenarioOptions::validate, "Raise ValueError on an invalid field.");
+
+  py::class_<RippleSpec>(m, "RippleSpec", "One ripple of eq 39.")
+      .def_readonly("amplitude", &RippleSpec::amplitude)
+      .def_readonly("wavelength", &RippleSpec::wavelength)
+      .def_readonly("alpha", &RippleSpec::alpha)
+      .def_readonly("start", &RippleSpec::start);
+
+  py::class_<Scenario>(m, "Scenario", "A generated trial: terrain, obstacles, path, start pose.")
+      .def_readonly("name", &Scenario::name)
+      .def_property_readonly("heights", [](const Scenario& s) { return s.terrain.heights(); },
+                             "height grid (nx x ny) [m]")
+      .def_property_readonly("spacing", [](const Scenario& s) { return s.terrain.spacing(); })
+      .def_property_readonly("origin", [](const Scenario& s) {
+        return py::make_tuple(s.terrain.origin_x(), s.terrain.origin_y());
+      })
+      .def("height", [](const Scenario& s, double x, double y) { return s.terrain.height(x, y); },
+           "x"_a, "y"_a, "Bilinear terrain height [m].")
+      .def_property_readonly("obstacles", &obstacle_rows,
+                             "rows (cx, cy, cz, lx, ly, lz, yaw, pitch, roll)")
+      .def_readonly("path", &Scenario::path)
+      .def_readonly("start_x", &Scenario::start_x)
+      .def_readonly("start_y", &Scenario::start_y)
+      .def_readonly("start_heading", &Scenario::start_heading)
+      .def_readonly("friction", &Scenario::friction)
+      .def_readonly("episode_duration", &Scenario::episode_duration)
+      .def_readonly("end_distance", &Scenario::end_distance)
+      .def_readonly("noise_amplitude", &Scenario::noise_amplitude)
+      .def_readonly("ground_pitch", &Scenario::ground_pitch)
+      .def_readonly("ground_roll", &Scenario::ground_roll)
+      .def_readonly("rock_density", &Scenario::rock_density)
+      .def_readonly("step_height", &Scenario::step_height)
+      .def_readonly("step_distance", &Scenario::step_distance)
+      .def_readonly("step_yaw", &Scenario::step_yaw)
+      .def_readonly("ripples", &Scenario::ripples)
+      .def_readonly("slope_angle", &Scenario::slope_angle)
+      .def_readonly("slope_beta_start", &Scenario::slope_beta_start)
+      .def_readonly("slope_beta_end", &Scenario::slope_beta_end)
+      .def_readonly("slope_length", &Scenario::slope_length)
+      .def_readonly("slope_start", &Scenario::slope_start)
+      .def_readonly("slope_direct", &Scenario::slope_direct)
+      .def_readonly("peak_slope", &Scenario::peak_slope);
+
+  m.def("generate_scenario", &generate_scenario, "options"_a, "seed"_a,
+        "Generate one trial deterministically from a seed.");
+  m.def("scenario_names", &scenario_names, "Names accepted by ScenarioOptions.kind.");
+  m.def("ripple_height", &ripple_height, "x"_a, "amplitude"_a, "wavelength"_a, "alpha"_a, "eq 39");
+
+  py::class_<EnvOptions>(m, "EnvOptions", "Options of one ERNEST episode (see rover_env.hpp).")
+      .def(py::init<>())
+      .def_readwrite("scenario", &EnvOptions::scenario)
+      .def_readwrite("soil", &EnvOptions::soil, "'dry_sand', 'm90' or 'wet_sand'")
+      .def_readwrite("rigid_ground", &EnvOptions::rigid_ground)
+      .def_readwrite("eps_slip", &EnvOptions::eps_slip, "eq 12 regularisation [(m/s)^-2]")
+      .def_readwrite("passive", &EnvOptions::passive, "gimbal off, clutch open")
+      .def_readwrite("physics_dt", &EnvOptions::physics_dt, "[s], 0 = simulator default")
+      .def_readwrite("policy_dt", &EnvOptions::policy_dt, "[s]")
+      .def_readwrite("episode_duration", &EnvOptions::episode_duration, "[s], 0 = scenario's")
+      .def_readwrite("sync_rate", &EnvOptions::sync_rate, "[Hz]")
+      .def_readwrite("fts_noise_force", &EnvOptions::fts_noise_force, "[N]")
+      .def_readwrite("fts_noise_torque", &EnvOptions::fts_noise_torque, "[N m]")
+      .def_readwrite("start_speed", &EnvOptions::start_speed, "[m/s]")
+      .def_readwrite("scales", &EnvOptions::scales)
+      .def_readwrite("weights", &EnvOptions::weights)
+      .def_readwrite("limits", &EnvOptions::limits)
+      .def("validate", &EnvOptions::validate, "Raise ValueError on an invalid field.");
+
+  py::class_<RoverEnv>(m, "RoverEnv", "One ERNEST episode: scenario, simulator, sensing, reward.")
+      .def(py::init<const dynamics::RoverParameters&, const EnvOptions&>(), "params"_a, "options"_a)
+      .def("reset", &RoverEnv::reset, "seed"_a, py::call_guard<py::gil_scoped_release>(),
+           "New trial from a seed; returns the 45 observation values.")
+      .def("reset_next", &RoverEnv::reset_next, py::call_guard<py::gil_scoped_release>(),
+           "New trial with the next seed of the sequence started by reset(seed).")
+      .def("step",
+           [](RoverEnv& e, const sensing::ActionVector& action) {
+             StepResult r;
+             {
+               py::gil_scoped_release release;
+               r = e.step(action);
+             }
+             return py::make_tuple(r.observation, r.reward.reward, r.terminated, r.truncated,
+                                   result_info(r));
+           },
+           "action"_a, "One policy step: (obs, reward, terminated, truncated, info).")
+      .def_property_readonly("scenario", &RoverEnv::scenario, py::return_value_policy::reference_internal)
+      .def_property_readonly("metrics", [](const RoverEnv& e) {
+        return metrics_dict(e.metrics(), e.parameters().total_mass());
+      })
+      .def_property_readonly("episode_seed", &RoverEnv::episode_seed)
+      .def_property_readonly("done", &RoverEnv::done)
+      .def_property_readonly("substeps", &RoverEnv::substeps)
+      .def_property_readonly("elevation", [](const RoverEnv& e) {
+        return Eigen::VectorXd(e.elevation().values);
+      }, "last elevation samples [m]")
+      .def_property_readonly("elevation_points", [](const RoverEnv& e) {
+        Eigen::Matrix<double, sensing::kElevationSamples, 2, Eigen::RowMajor> p;
+        for (int k = 0; k < sensing::kElevationSamples; ++k) p.row(k) = e.sampler().point(k).transpose();
+        return p;
+      }, "chassis-frame (x, y) of the 12 samples [m]")
+      .def_property_readonly("fts", &RoverEnv::fts, "last processed force–torque values (4 x 6)")
+      .def_property_readonly("fts_bias", &RoverEnv::fts_bias)
+      .def_property_readonly("current_action", &RoverEnv::current_action)
+      .def_property_readonly("state", [](const RoverEnv& e) {
+        const auto& s = e.sim().state();
+        py::dict d;
+        d["time"] = s.time;
+        d["position"] = s.position;
+        d["quaternion"] = s.quaternion;
+        d["roll"] = s.roll;
+        d["pitch"] = s.pitch;
+        d["yaw"] = s.yaw;
+        d["gimbal_yaw"] = s.gimbal_yaw;
+        d["gimbal_roll"] = s.gimbal_roll;
+        d["roll_torque"] = s.roll_torque;
+        d["yaw_torque"] = s.yaw_torque;
+        Eigen::Matrix<double, 4, 3, Eigen::RowMajor> wp;
+        for (int i = 0; i < 4; ++i) wp.row(i) = s.wheel_position[i].transpose();
+        d["wheel_position"] = wp;
+        d["wheel_load"] = s.wheel_load;
+        d["sinkage"] = s.sinkage;
+        d["wheel_speed"] = s.wheel_speed;
+        d["energy"] = s.energy;
+        return d;
+      }, "ground truth of the rover (dict of numpy values)");
+
+  py::class_<VecRoverEnv>(m, "VecRoverEnv",
+                          "N RoverEnv episodes stepped in parallel (next-step autoreset).")
+      .def(py::init<const dynamics::RoverParameters&, const EnvOptions&, int, int>(), "params"_a,
+           "options"_a, "num_envs"_a, "num_threads"_a)
+      .def("reset", &VecRoverEnv::reset, "seeds"_a, py::call_guard<py::gil_scoped_release>(),
+           "Reset env i from seeds[i]; returns num_envs x 45 observations.")
+      .def("step",
+           [](VecRoverEnv& v, const Eigen::Ref<const ActionBatch>& actions) {
+             ObservationBatch obs(v.size(), sensing::kObservationSize);
+             std::vector<StepResult> res;
+             std::vector<char> was_reset;
+             {
+               py::gil_scoped_release release;
+               v.step(actions, obs, res, was_reset);
+             }
+             const int n = v.size();
+             Eigen::VectorXd reward(n), progress(n), lateral(n);
+             Eigen::Array<bool, Eigen::Dynamic, 1> term(n), trunc(n), div(n), reset(n);
+             for (int i = 0; i < n; ++i) {
+               reward[i] = res[i].reward.reward;
+               progress[i] = res[i].reward.progress;
+               lateral[i] = res[i].reward.lateral;
+               term[i] = res[i].terminated;
+               trunc[i] = res[i].truncated;
+               div[i] = res[i].diverged;
+               reset[i] = was_reset[i] != 0;
+             }
+             py::dict info;
+             info["progress"] = progress;
+             info["lateral_deviation"] = lateral;
+             info["diverged"] = div;
+             info["reset"] = reset;
+             return py::make_tuple(obs, reward, term, trunc, info);
+           },
+           "actions"_a,
+           "One policy step of all envs (num_envs x 3): (obs, reward, terminated, truncated, info).")
+      .def("env", &VecRoverEnv::env, "i"_a, py::return_value_policy::reference_internal)
+      .def_property_readonly("size", &VecRoverEnv::size)
+      .def_property_readonly("threads", &VecRoverEnv::threads);
+}
+
+}  // namespace ernest::bindings

@@ -1,0 +1,38 @@
+"""Gymnasium environments of seed 004 §4.5 (training scenarios) and §5 (evaluation courses).
+
+Registered ids (kwargs of ``gymnasium.make`` go to :class:`ErnestEnv`)::
+
+    ernest/RockField-v0  ernest/Step-v0  ernest/Ripples-v0  ernest/Slope-v0
+    ernest/BicklerTrap-v0  ernest/SlopeEval-v0  ernest/WheelStep-v0  ernest/Course-v0
+    ernest/Flat-v0
+
+``make_vec(id, num_envs)`` gives the C++-backed vector environment.
+"""
+
+import gymnasium as gym
+
+from .core import ErnestEnv, make_options  # noqa: F401
+from .vector import ErnestVectorEnv, make_vec  # noqa: F401
+
+ENV_IDS = {
+    "ernest/RockField-v0": "rockfield",
+    "ernest/Step-v0": "step",
+    "ernest/Ripples-v0": "ripples",
+    "ernest/Slope-v0": "slope",
+    "ernest/BicklerTrap-v0": "bickler",
+    "ernest/SlopeEval-v0": "slope_eval",
+    "ernest/WheelStep-v0": "wheel_step",
+    "ernest/Course-v0": "course",
+    "ernest/Flat-v0": "flat",
+}
+
+
+def register_envs() -> None:
+    """Register the ids above (idempotent; also run by gymnasium's plugin entry point)."""
+    for env_id, scenario in ENV_IDS.items():
+        if env_id not in gym.registry:
+            gym.register(id=env_id, entry_point="ernest_cpp.envs.core:ErnestEnv",
+                         kwargs={"scenario": scenario}, disable_env_checker=True)
+
+
+register_envs()

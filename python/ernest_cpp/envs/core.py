@@ -1,0 +1,150 @@
+"""The single Gymnasium environment over the C++ episode core (``ernest_cpp._core.envs.RoverEnv``)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from .._core import dynamics as _dyn
+from .._core import envs as _envs
+from .. import sensing
+
+SCENARIO_ALIASES = {
+    "rockfield": "rockfield", "rock_field": "rockfield", "step": "step", "ripples": "ripples",
+    "slope": "slope", "bickler": "bickler", "bickler_trap": "bickler", "slope_eval": "slope_eval",
+    "wheel_step": "wheel_step", "course": "course", "flat": "flat",
+}
+
+
+def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool = False,
+                 physics_dt: float = 0.0, episode_length: float = 0.0, rigid_ground: bool = False,
+                 eps_slip: float = 1e4, fts_noise_force: float = 0.0, fts_noise_torque: float = 0.0,
+                 start_speed: float = 0.0, randomisation: dict | None = None) -> _envs.EnvOptions:
+    """EnvOptions from keyword arguments (the Gymnasium kwargs), validated.
+
+    ``randomisation`` sets ScenarioOptions fields (grid_spacing, noise_unit, p_instance,
+    max_rock_density, clear_radius, eval_slope_deg).
+    """
+    if scenario not in SCENARIO_ALIASES:
+        raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(sorted(SCENARIO_ALIASES))}")
+    o = _envs.EnvOptions()
+    sc = _envs.ScenarioOptions()
+    sc.kind = SCENARIO_ALIASES[scenario]
+    for key, value in (randomisation or {}).items():
+        if key == "kind" or not hasattr(sc, key):
+            raise ValueError(f"randomisation has no field {key!r}")
+        setattr(sc, key, float(value))
+    o.scenario = sc
+    o.soil = soil
+    o.passive = bool(passive)
+    o.physics_dt = float(physics_dt)
+    o.episode_duration = float(episode_length)
+    o.rigid_ground = bool(rigid_ground)
+    o.eps_slip = float(eps_slip)
+    o.fts_noise_force = float(fts_noise_force)
+    o.fts_noise_torque = float(fts_noise_torque)
+    o.start_speed = float(start_speed)
+    o.validate()
+    return o
+
+
+def observation_layout(options: _envs.EnvOptions):
+    """The layout the training and export code use (``ernest_cpp.rl.layout``): the observation is
+    already normalised by the C++ table ``options.scales`` (offset 0), so physical values are
+    ``obs * scale``; the exported policy takes physical values and applies the same table."""
+    from ..rl import layout as L  # numpy only; does not load torch
+
+    return L.ObservationLayout(f"ernest-obs-v{sensing.OBSERVATION_LAYOUT_VERSION}",
+                               list(sensing.observation_names()), np.zeros(sensing.OBSERVATION_SIZE),
+                               np.asarray(options.scales.divisors()), L.ACTION_LOW, L.ACTION_HIGH,
+                               L.paper_noise_groups())
+
+
+class ErnestEnv(gym.Env):
+    """ERNEST on one of the seed 004 scenarios (§4.5) or evaluation courses (§5).
+
+    Observation: 45 float32 values in the order of §4.2 (see ``sensing.observation_names()``),
+    each divided by its maximum expected value. Action: 3 values in [-1, 1] -> V_x in
+    [0, 0.2] m/s, yaw rate +-20 deg/s, roll rate +-10 deg/s, applied for 0.5 s (2 Hz). Reward:
+    eq 38 with its terms in ``info``. Episodes end at the end of the map (terminated) or at the
+    time limit (truncated); a diverged simulation ends the episode with ``info["diverged"]``.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
+
+    def __init__(self, scenario: str = "rockfield", render_mode: str | None = None,
+                 params: Any = None, **kwargs):
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode = {render_mode!r}; allowed: None, 'rgb_array'")
+        self.render_mode = render_mode
+        self.scenario_name = scenario
+        self.options = make_options(scenario, **kwargs)
+        self.params = params if params is not None else _dyn.RoverParameters()
+        self.core = _envs.RoverEnv(self.params, self.options)
+        clip = sensing.OBSERVATION_CLIP
+        self.observation_space = gym.spaces.Box(-clip, clip, (sensing.OBSERVATION_SIZE,), np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (sensing.ACTION_SIZE,), np.float32)
+        self.observation_layout = observation_layout(self.options)
+        self._started = False
+        self.history: list[dict] = []  # per-step ground truth for plots (cleared at reset)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        if seed is not None:
+            obs = self.core.reset(int(seed))
+        elif not self._started:
+            obs = self.core.reset(int(self.np_random.integers(0, 2**63 - 1)))
+        else:
+            obs = self.core.reset_next()
+        self._started = True
+        self.history = [self._snapshot(None)]
+        return obs.astype(np.float32), {"episode_seed": self.core.episode_seed,
+                                        "scenario": self.core.scenario.name}
+
+    def step(self, action):
+        a = np.asarray(action, dtype=np.float64).reshape(-1)
+        if a.shape != (sensing.ACTION_SIZE,):
+            raise ValueError(f"action must have 3 values, got shape {np.shape(action)}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError("action must be finite")
+        obs, reward, terminated, truncated, info = self.core.step(a)
+        self.history.append(self._snapshot(info))
+        if terminated or truncated:
+            info["episode_metrics"] = self.core.metrics
+        return obs.astype(np.float32), float(reward), bool(terminated), bool(truncated), info
+
+    def _snapshot(self, info):
+        s = self.core.state
+        return {"time": s["time"], "position": np.array(s["position"]), "yaw": s["yaw"],
+                "roll": s["roll"], "pitch": s["pitch"], "gimbal_yaw": s["gimbal_yaw"],
+                "gimbal_roll": s["gimbal_roll"], "roll_torque": s["roll_torque"],
+                "wheel_load": np.array(s["wheel_load"]), "energy": s["energy"],
+                "action": np.array(self.core.current_action)}
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        from .render import render_frame
+
+        return render_frame(self)
+
+    # convenient accessors
+    @property
+    def scenario(self):
+        return self.core.scenario
+
+    @property
+    def metrics(self) -> dict:
+        return self.core.metrics
+
+    def heading_and_lateral(self) -> tuple[float, float]:
+        s = self.core.state
+        p = self.core.scenario.path
+        return p.heading_deviation(s["yaw"]), p.lateral_deviation(s["position"][0], s["position"][1])
+
+
+def deg(x: float) -> float:
+    return math.degrees(x)

@@ -1,0 +1,198 @@
+"""``ernest evaluate``: the passive bogie and the scripted gimbal controller (and optionally an
+exported policy) over the evaluation courses of seed 004 §5: Bickler trap, 20 deg slope on dry M90
+and on wet sand (Table 6), wheel-high step and a mixed course. Writes a markdown report with a
+metrics table, PNG plots and a short animation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+
+import gymnasium as gym
+import numpy as np
+
+from . import envs as E
+from .envs.baselines import PassiveController, ScriptedGimbalController
+
+COURSES = [  # (label, env id, kwargs)
+    ("Bickler trap (M90)", "ernest/BicklerTrap-v0", {}),
+    ("20 deg slope, dry M90", "ernest/SlopeEval-v0", {"soil": "m90"}),
+    ("20 deg slope, wet sand", "ernest/SlopeEval-v0", {"soil": "wet_sand"}),
+    ("Wheel-high step (M90)", "ernest/WheelStep-v0", {}),
+    ("Mixed course (M90)", "ernest/Course-v0", {}),
+]
+
+
+def controllers(policy_file: str | None):
+    out = {"passive bogie": (PassiveController(), True),
+           "scripted gimbal": (ScriptedGimbalController(), False)}
+    if policy_file:
+        from .rl.export import load_policy  # TorchScript actor with its scaling (issue 6)
+
+        import torch
+
+        from . import sensing
+
+        module, _ = load_policy(policy_file)
+        scale = np.asarray(sensing.ObservationScales().divisors())
+
+        def learned(obs, env=None):
+            # the exported module takes physical observations and returns (Vx, yaw rate, roll rate)
+            with torch.no_grad():
+                cmd = module(torch.as_tensor(obs * scale, dtype=torch.float32)).numpy()
+            return sensing.command_to_action(cmd.astype(np.float64))
+
+        out["learned policy"] = (learned, False)
+    return out
+
+
+def run_episode(env_id: str, kwargs: dict, policy, passive: bool, seed: int):
+    env = gym.make(env_id, passive=passive, **kwargs)
+    obs, _ = env.reset(seed=seed)
+    while True:
+        obs, _, term, trunc, info = env.step(policy(obs, env))
+        if term or trunc:
+            break
+    u = env.unwrapped
+    return u.metrics, u.history, u, info
+
+
+def _plots(results, out_dir: str) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    paths = []
+    # 1. paths over each course
+    fig, axes = plt.subplots(len(COURSES), 1, figsize=(9, 2.3 * len(COURSES)))
+    for ax, (label, _, _) in zip(axes, COURSES):
+        for name, r in results[label].items():
+            xy = np.array([h["position"][:2] for h in r["history"]])
+            ax.plot(xy[:, 0], xy[:, 1], label=f"{name}: {r['metrics']['progress']:.2f} m")
+        env = next(iter(results[label].values()))["env"]
+        for o in np.asarray(env.scenario.obstacles):
+            if o[3] < 10:
+                ax.add_patch(plt.Rectangle((o[0] - o[3] / 2, o[1] - o[4] / 2), o[3], o[4],
+                                           color="0.6"))
+        ax.set_title(label, fontsize=9)
+        ax.set_xlim(-1, 14 if "course" not in label.lower() else 24)
+        ax.set_ylim(-2, 2)
+        ax.set_aspect("equal")
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1].set_xlabel("x [m]")
+    fig.tight_layout()
+    paths.append(_save(fig, out_dir, "paths.png"))
+    # 2. gait on the dry slope, like seed 004 Fig. 24: joints, roll torque, wheel loads
+    label = "20 deg slope, dry M90"
+    fig, axes = plt.subplots(3, len(results[label]), figsize=(11, 7), sharex=True, squeeze=False)
+    for col, (name, r) in enumerate(results[label].items()):
+        h = r["history"]
+        t = np.array([x["time"] for x in h])
+        axes[0, col].plot(t, np.degrees([x["gimbal_yaw"] for x in h]), label="yaw")
+        axes[0, col].plot(t, np.degrees([x["gimbal_roll"] for x in h]), label="roll")
+        axes[0, col].set_ylabel("joint [deg]")
+        axes[0, col].set_title(name, fontsize=9)
+        axes[0, col].legend(fontsize=7)
+        axes[1, col].plot(t, [x["roll_torque"] for x in h], color="tab:red")
+        axes[1, col].set_ylabel("roll torque [N m]")
+        loads = np.array([x["wheel_load"] for x in h])
+        for i, w in enumerate(["FL", "FR", "RL", "RR"]):
+            axes[2, col].plot(t, loads[:, i], label=w)
+        axes[2, col].set_ylabel("wheel load [N]")
+        axes[2, col].set_xlabel("time [s]")
+        axes[2, col].legend(fontsize=7, ncol=4)
+    fig.suptitle("Gait on a 20 deg M90 slope (compare seed 004 Figs 23-24)", fontsize=10)
+    fig.tight_layout()
+    paths.append(_save(fig, out_dir, "slope_gait.png"))
+    # 3. bar chart of travel reduction and cost of transport
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 3.6))
+    names = list(next(iter(results.values())).keys())
+    x = np.arange(len(COURSES))
+    for k, name in enumerate(names):
+        tr = [100 * results[c[0]][name]["metrics"]["travel_reduction"] for c in COURSES]
+        cot = [min(results[c[0]][name]["metrics"]["cost_of_transport"], 50) for c in COURSES]
+        a1.bar(x + 0.8 * k / len(names), tr, 0.8 / len(names), label=name)
+        a2.bar(x + 0.8 * k / len(names), cot, 0.8 / len(names), label=name)
+    for a, yl in ((a1, "travel reduction [%]"), (a2, "cost of transport [-] (capped at 50)")):
+        a.set_xticks(x + 0.4 - 0.4 / len(names))
+        a.set_xticklabels([c[0].split(" (")[0] for c in COURSES], rotation=20, fontsize=7)
+        a.set_ylabel(yl)
+        a.legend(fontsize=7)
+    fig.tight_layout()
+    paths.append(_save(fig, out_dir, "metrics.png"))
+    return paths
+
+
+def _save(fig, out_dir, name):
+    import matplotlib.pyplot as plt
+
+    path = os.path.join(out_dir, name)
+    fig.savefig(path + ".tmp.png", dpi=100)
+    os.replace(path + ".tmp.png", path)
+    plt.close(fig)
+    return path
+
+
+def run(args: argparse.Namespace) -> int:
+    os.makedirs(args.out, exist_ok=True)
+    ctrls = controllers(args.policy)
+    results: dict[str, dict] = {}
+    total = len(COURSES) * len(ctrls)
+    k = 0
+    t_start = time.perf_counter()
+    for label, env_id, kwargs in COURSES:
+        results[label] = {}
+        for name, (policy, passive) in ctrls.items():
+            k += 1
+            t0 = time.perf_counter()
+            metrics, history, env, info = run_episode(env_id, kwargs, policy, passive, args.seed)
+            results[label][name] = {"metrics": metrics, "history": history, "env": env}
+            print(f"[{k:2d}/{total}] {label:24s} {name:16s} progress {metrics['progress']:5.2f} m "
+                  f"travel reduction {100 * metrics['travel_reduction']:5.1f} % "
+                  f"CoT {metrics['cost_of_transport']:7.3f}  ({info['message']}, "
+                  f"{time.perf_counter() - t0:.1f} s)", flush=True)
+    lines = ["# ERNEST evaluation report", "",
+             f"Seed {args.seed}. Travel reduction = 1 - progress / no-slip travel (seed 004 Table 6); "
+             "cost of transport = electrical energy of all six actuators (eq 40) / (m g progress).", "",
+             "| course | controller | progress [m] | travel reduction [%] | cost of transport [-] | "
+             "energy [kJ] | time [s] |", "|---|---|---|---|---|---|---|"]
+    for label, _, _ in COURSES:
+        for name, r in results[label].items():
+            m = r["metrics"]
+            cot = m["cost_of_transport"]
+            lines.append(f"| {label} | {name} | {m['progress']:.2f} | {100 * m['travel_reduction']:.1f} | "
+                         f"{'inf' if not math.isfinite(cot) else f'{cot:.3f}'} | {m['energy'] / 1e3:.2f} | "
+                         f"{m['time']:.0f} |")
+    pngs = _plots(results, args.out)
+    lines += ["", *[f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs]]
+    if not args.no_video:
+        from .envs.render import record_episode
+
+        name = "learned policy" if "learned policy" in ctrls else "scripted gimbal"
+        policy, passive = ctrls[name]
+        env = gym.make("ernest/Course-v0", passive=passive, render_mode="rgb_array")
+        video = os.path.join(args.out, "course.gif")
+        print(f"recording {name} on the mixed course -> {video}", flush=True)
+        record_episode(env.unwrapped, policy, video, seed=args.seed, every=3, max_steps=160)
+        lines += ["", f"Animation: [{os.path.basename(video)}]({os.path.basename(video)})"]
+    report = os.path.join(args.out, "report.md")
+    with open(report + ".tmp", "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    os.replace(report + ".tmp", report)
+    print("\n".join(lines[4:4 + total + 2]))
+    print(f"wrote {report} ({time.perf_counter() - t_start:.0f} s)")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("evaluate", help="passive vs scripted (vs learned) on the evaluation courses",
+                       description=__doc__)
+    p.add_argument("--out", default="out/report", help="output folder (default: out/report)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--policy", default=None, help="exported TorchScript policy to evaluate too")
+    p.add_argument("--no-video", action="store_true", help="skip the animation")
+    p.set_defaults(func=run)
