@@ -687,6 +687,9 @@ void RoverSim::Impl::step() {
     dBodyAddForce(body[kChassis], pending_force.x(), pending_force.y(), pending_force.z());
     pending_force.setZero();
   }
+  // dWorldStep (Dantzig LCP), not dWorldQuickStep: QuickStep reorders constraints with ODE's
+  // process-wide random generator (runs are not reproducible) and at equal accuracy (~50
+  // iterations) it is no faster for this 6-body rover (benchmarks/RESULTS.md).
   dWorldStep(world, opt.dt);
   read_outputs(opt.dt);
   dJointGroupEmpty(contacts);

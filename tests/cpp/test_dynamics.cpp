@@ -92,7 +92,7 @@ TEST(StaticLoads, RigidGroundMatchesMassModelAtSeveralYaws) {
     RoverSim sim(p, HeightMap::flat(10, 10, 0.5), {}, rigid_options());
     sim.reset(0.0, 0.0, 0.3, psi, 0.0);
     sim.set_commands(passive());
-    sim.step_n(150);  // 3 s
+    sim.step_n(150);  // 3.75 s at the default step
     const auto& st = sim.state();
     EXPECT_NEAR(sum4(st.wheel_load), p.total_mass() * g, 0.005 * p.total_mass() * g) << psi;
     for (int i = 0; i < 4; ++i)
@@ -108,7 +108,7 @@ TEST(Soil, M90SinkageAtRestMatchesSoilRig) {
   sim.set_commands(passive());
   sim.step_n(100);
   std::array<double, 4> load{}, sink{};
-  // Averaged over 2 s: with Table 2's eps_motion = 5e-5 m/s the rest state jitters (eq 16's
+  // Averaged over 2.5 s: with Table 2's eps_motion = 5e-5 m/s the rest state jitters (eq 16's
   // t_rest flips the stress distribution between "moving" and "at rest" on micro-motions; see
   // benchmarks/RESULTS.md), so single samples scatter by ~10 %.
   const int n = 100;
@@ -141,7 +141,7 @@ TEST(Soil, M90SinkageWhileDrivingMatchesSoilRig) {
   Commands c = passive();
   for (auto& w : c.wheel_speed) w = 0.2 / p.wheel_radius;
   sim.set_commands(c);
-  sim.step_n(250);  // 5 s: steady state
+  sim.step_n(250);  // 6.25 s: steady state
   const soil::BekkerWongModel model(o.soil, soil::WheelGeometry{p.wheel_radius, p.wheel_width});
   const auto& st = sim.state();
   const double v = st.linear_velocity.x();
@@ -166,7 +166,7 @@ TEST(Energy, MotorsOffOnHardSlopeGainsNoEnergy) {
   sim.set_commands(c);
   const double e0 = sim.kinetic_energy() + sim.potential_energy();
   double max_gain = -1e9, min_e = e0;
-  for (int k = 0; k < 200; ++k) {  // 4 s
+  for (int k = 0; k < 200; ++k) {  // 5 s
     sim.step();
     const double e = sim.kinetic_energy() + sim.potential_energy();
     max_gain = std::max(max_gain, e - e0);
@@ -300,7 +300,7 @@ TEST(WheelSync, ClosedLoopOnHardGroundNoSideSlipAndKinematicTurn) {
   double max_vy = 0.0;
   double yaw_rate_sum = 0.0, psi_sum = 0.0;
   int n = 0;
-  for (int k = 0; k < 500; ++k) {  // 10 s at 50 Hz
+  for (int k = 0; k < 500; ++k) {  // 12.5 s, synchroniser every step (40 Hz)
     const double t = k * sim.options().dt;
     const auto& s = sim.state();
     const double cmd_psid = t < 3.0 ? psid : 0.0;  // yaw to ~0.3 rad, then hold

@@ -1,0 +1,177 @@
+"""``ernest slope-demo``: ERNEST climbing a 20° M90 slope in simulation (seed 004 §5.5, Table 6),
+with the passive bogie (AGS off, clutch open) and with a simple scripted gimbal controller (a
+crawling gait: the roll joint shifts the load to one diagonal while the yaw joint swings the bogie,
+wheel speeds from the synchroniser of §2.3). Prints travel reduction (expected no-slip travel vs
+actual, as Table 6 defines it) and cost of transport (electrical energy / (m g d)), and writes plots
+of the path, the gimbal angles and the wheel loads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import os
+
+import numpy as np
+
+from . import dynamics as D
+
+SLOPE_DEG = 20.0
+
+
+def _terrain(slope_deg: float) -> D.HeightMap:
+    # 20 m of slope rising along +x from x = -2 (the rover starts on it), 8 m wide.
+    return D.HeightMap.slope(math.radians(slope_deg), 24.0, 8.0, 0.25, -4.0, -4.0)
+
+
+def run(controller: str, soil: str = "m90", duration: float = 60.0, vx: float = 0.1,
+        slope_deg: float = SLOPE_DEG, period: float = 8.0, yaw_amp_deg: float = 20.0,
+        roll_amp_deg: float = 6.0) -> dict[str, np.ndarray | float | str]:
+    """Simulate one controller ('passive' or 'gimbal'); returns time series and the metrics."""
+    if controller not in ("passive", "gimbal"):
+        raise ValueError(f"controller must be 'passive' or 'gimbal', got {controller!r}")
+    if duration <= 0 or vx <= 0:
+        raise ValueError("duration and vx must be > 0")
+    sim = D.make_sim("soil", terrain=_terrain(slope_deg), soil=soil)
+    # Rolling start at the commanded speed: under eq 12's slip regularisation a wheel cannot build
+    # slip from rest (see benchmarks/RESULTS.md, dynamics).
+    sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, vx)
+    dt = sim.options.dt
+    n = int(round(duration / dt))
+    w = 2.0 * math.pi / period
+    a_yaw, a_roll = math.radians(yaw_amp_deg), math.radians(roll_amp_deg)
+    keys = ("t", "x", "y", "z", "psi", "phi", "roll_torque", "energy")
+    rec = {k: np.zeros(n) for k in keys}
+    loads = np.zeros((n, 4))
+    fts_z = np.zeros((n, 4))
+    start = sim.state.position.copy()
+    expected = 0.0
+    for k in range(n):
+        t = k * dt
+        if controller == "passive":
+            c = D.sync_commands(sim, vx, 0.0, 0.0, gimbal_enabled=False, clutch_engage=False)
+        else:
+            # psi = A sin(w t), phi = -B cos(w t) (after a 2 s clutch alignment): the roll presses
+            # the wheel on the side the bogie swings away from, which anchors while the other
+            # advances; the synchroniser turns (Vx, psi_dot, phi_dot) into wheel speeds.
+            yaw_rate = a_yaw * w * math.cos(w * t)
+            roll_rate = a_roll * w * math.sin(w * t) if t > 2.0 else 0.0
+            c = D.sync_commands(sim, vx, yaw_rate, roll_rate, gimbal_enabled=True,
+                                clutch_engage=True)
+        sim.set_commands(c)
+        sim.step()
+        expected += vx * dt  # no-slip travel of the chassis at the commanded Vx
+        s = sim.state
+        rec["t"][k] = s.time
+        rec["x"][k], rec["y"][k], rec["z"][k] = s.position
+        rec["psi"][k], rec["phi"][k] = s.gimbal_yaw, s.gimbal_roll
+        rec["roll_torque"][k] = s.roll_torque
+        rec["energy"][k] = s.energy
+        loads[k] = s.wheel_load
+        fts_z[k] = s.fts[:, 2]
+    end = sim.state.position
+    # Travel along the slope (3-D displacement projected on the uphill direction).
+    up = np.array([math.cos(math.radians(slope_deg)), 0.0, math.sin(math.radians(slope_deg))])
+    actual = float(np.dot(end - start, up))
+    m = sim.parameters.total_mass()
+    g = sim.options.soil.gravity
+    energy = float(sim.state.energy)
+    out: dict[str, np.ndarray | float | str] = dict(rec)
+    out.update(controller=controller, loads=loads, fts_z=fts_z, expected=expected, actual=actual,
+               travel_reduction=(expected - actual) / expected,
+               cost_of_transport=energy / (m * g * actual) if actual > 1e-6 else math.inf,
+               energy_J=energy)
+    return out
+
+
+def _plot(runs: list[dict], out_dir: str, tag: str) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    paths = []
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for r in runs:
+        ax.plot(r["x"], r["y"], label=r["controller"])
+    ax.plot([runs[0]["x"][0]], [runs[0]["y"][0]], "ko", label="start")
+    ax.set(xlabel="x up the slope [m]", ylabel="y [m]",
+           title=f"Path on a {SLOPE_DEG:.0f}° {tag} slope")
+    ax.axis("equal")
+    ax.legend()
+    fig.tight_layout()
+    paths.append(os.path.join(out_dir, f"path_{tag}.png"))
+    fig.savefig(paths[-1], dpi=120)
+    plt.close(fig)
+
+    fig, axes = plt.subplots(len(runs), 2, figsize=(10, 3 * len(runs)), squeeze=False)
+    for row, r in zip(axes, runs):
+        row[0].plot(r["t"], np.degrees(r["psi"]), label="yaw ψ")
+        row[0].plot(r["t"], np.degrees(r["phi"]), label="roll φ")
+        row[0].set(xlabel="t [s]", ylabel="[deg]", title=f"{r['controller']}: gimbal angles")
+        row[0].legend()
+        for i, name in enumerate(D.WHEELS):
+            row[1].plot(r["t"], r["loads"][:, i], label=name, lw=0.8)
+        row[1].set(xlabel="t [s]", ylabel="[N]", title=f"{r['controller']}: wheel normal loads")
+        row[1].legend(ncol=4, fontsize=8)
+    fig.suptitle(f"{SLOPE_DEG:.0f}° slope, {tag}")
+    fig.tight_layout()
+    paths.append(os.path.join(out_dir, f"gait_{tag}.png"))
+    fig.savefig(paths[-1], dpi=120)
+    plt.close(fig)
+    return paths
+
+
+def main_args(args: argparse.Namespace) -> int:
+    os.makedirs(args.out, exist_ok=True)
+    soils = [x.strip() for x in args.soils.split(",") if x.strip()]
+    for soil in soils:
+        if soil not in ("m90", "dry_sand", "wet_sand"):
+            raise ValueError(f"unknown soil {soil!r} (m90, dry_sand, wet_sand)")
+    lines = [f"# {SLOPE_DEG:.0f}° slope, {args.duration:.0f} s at Vx = {args.vx} m/s "
+             "(travel reduction and cost of transport as in seed 004 Table 6)", "",
+             "| soil | controller | expected [m] | actual [m] | travel reduction [%] | energy [J] | "
+             "CoT E/(m g d) | E/(m d) [J/(kg m)] |", "|---|---|---|---|---|---|---|---|"]
+    all_runs = {}
+    for soil in soils:
+        runs = [run(c, soil, args.duration, args.vx) for c in ("passive", "gimbal")]
+        all_runs[soil] = runs
+        for r in runs:
+            m_d = D.RoverParameters().total_mass() * r["actual"]
+            lines.append(f"| {soil} | {r['controller']} | {r['expected']:.2f} | {r['actual']:.2f} | "
+                         f"{100 * r['travel_reduction']:.1f} | {r['energy_J']:.0f} | "
+                         f"{r['cost_of_transport']:.3f} | "
+                         f"{(r['energy_J'] / m_d if m_d > 1e-6 else math.inf):.2f} |")
+    lines += ["", "Travel reduction > 100 % means the rover slid back down; CoT is infinite when it "
+              "made no progress (Table 6 writes ∞ for the immobilised passive rover)."]
+    summary = "\n".join(lines)
+    print(summary)
+    with open(os.path.join(args.out, "summary.md"), "w") as fh:
+        fh.write(summary + "\n")
+    with open(os.path.join(args.out, "slope_runs.csv"), "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["soil", "controller", "t", "x", "y", "z", "psi", "phi", "roll_torque",
+                    "energy", "load_FL", "load_FR", "load_RL", "load_RR"])
+        for soil, runs in all_runs.items():
+            for r in runs:
+                for k in range(0, len(r["t"]), 5):
+                    w.writerow([soil, r["controller"]] + [f"{r[c][k]:.5g}" for c in
+                               ("t", "x", "y", "z", "psi", "phi", "roll_torque", "energy")] +
+                               [f"{v:.5g}" for v in r["loads"][k]])
+    for soil, runs in all_runs.items():
+        for p in _plot(runs, args.out, soil):
+            print(f"wrote {p}")
+    return 0
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser("slope-demo", help="passive bogie vs scripted gimbal gait on a 20° "
+                              "slope (M90 and dry sand): travel reduction, cost of transport, plots",
+                              description=__doc__)
+    p.add_argument("--out", default="out/dynamics", help="output folder (default out/dynamics)")
+    p.add_argument("--soils", default="m90,dry_sand",
+                   help="comma-separated soil presets (default m90,dry_sand)")
+    p.add_argument("--duration", type=float, default=60.0, help="simulated seconds (default 60)")
+    p.add_argument("--vx", type=float, default=0.1, help="commanded forward speed [m/s]")
+    p.set_defaults(func=main_args)
