@@ -466,3 +466,36 @@ TEST(BatchStepper, ThreadsGiveTheSameBitsAsSequentialStepping) {
     EXPECT_EQ(std::memcmp(obs.data(), seq.data(), obs.size() * sizeof(double)), 0) << rep;
   }
 }
+
+TEST(GimbalSuspension, ClutchAlignsTheBogieFrameAtBoundedSpeedBeforeEngaging) {
+  // §2.2: with the pins out the roll actuator turns the (unloaded) bogie frame on its own; on an
+  // engage request the frame is driven back to the bogie at bounded speed, then the pins engage.
+  const RoverParameters p;
+  RoverSim sim(p, HeightMap::flat(10, 10, 0.5), {}, rigid_options());
+  Commands c;
+  c.roll_rate = -0.2;  // clutch open: only the frame moves
+  sim.set_commands(c);
+  sim.step_n(40);  // 1 s
+  const double frame0 = sim.state().bogie_frame_angle;
+  const double bogie0 = sim.state().gimbal_roll;
+  EXPECT_LT(frame0, -0.15);
+  EXPECT_NEAR(bogie0, 0.0, 0.01);  // the bogie did not follow
+  c.roll_rate = 0.0;
+  c.clutch_engage = true;
+  sim.set_commands(c);
+  double prev = frame0;
+  int steps = 0;
+  while (sim.state().clutch != ClutchState::Engaged && steps < 400) {
+    sim.step();
+    ++steps;
+    const double rate = (sim.state().bogie_frame_angle - prev) / sim.options().dt;
+    if (sim.state().clutch == ClutchState::Aligning) {
+      EXPECT_LE(std::abs(rate), p.clutch_align_speed * (1 + 1e-9));
+    }
+    prev = sim.state().bogie_frame_angle;
+  }
+  ASSERT_EQ(sim.state().clutch, ClutchState::Engaged);
+  // It cannot have been faster than the bound allows.
+  EXPECT_GE(steps * sim.options().dt, (std::abs(frame0 - bogie0) - 0.02) / p.clutch_align_speed);
+  EXPECT_NEAR(sim.state().bogie_frame_angle, sim.state().gimbal_roll, p.clutch_align_tolerance);
+}
