@@ -16,9 +16,10 @@ namespace ernest::bindings {
 using namespace ernest::envs;
 
 namespace {
-py::dict result_info(const StepResult& r) {
+py::dict result_info(const StepResult& r, const RoverEnv& e) {
   py::dict d;
   d["progress"] = r.reward.progress;
+  d["path_progress"] = e.metrics().progress;  // distance along the path since the start [m]
   d["lateral_deviation"] = r.reward.lateral;
   d["reward_progress"] = r.reward.progress_term;
   d["reward_lateral"] = r.reward.lateral_term;
@@ -147,7 +148,7 @@ void bind_envs(py::module_& m) {
                r = e.step(action);
              }
              return py::make_tuple(r.observation, r.reward.reward, r.terminated, r.truncated,
-                                   result_info(r));
+                                   result_info(r, e));
            },
            "action"_a, "One policy step: (obs, reward, terminated, truncated, info).")
       .def_property_readonly("scenario", &RoverEnv::scenario, py::return_value_policy::reference_internal)

@@ -9,22 +9,16 @@
 #include <stdexcept>
 #include <string>
 
+#include "test_util.hpp"
 #include "ernest/sensing/elevation_sampler.hpp"
 #include "ernest/sensing/fts_processor.hpp"
 #include "ernest/sensing/observation.hpp"
 #include "ernest/sensing/path_reward.hpp"
 
 using namespace ernest::sensing;
+using ernest::testing::invalid_argument_message;
 
 namespace {
-std::string message_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
 
 // Plane z = z0 + gx x + gy y, optionally with a hole (no data) where hole(x, y) is true.
 struct PlaneSource : HeightSource {
@@ -82,7 +76,7 @@ TEST(Fts, BiasAndFourSensorMeanAreRemoved) {
   EXPECT_THROW(p.update(bad), std::invalid_argument);
   FtsFilterOptions o;
   o.cutoff = 300.0;  // above Nyquist of 400 Hz
-  EXPECT_NE(message_of([&] { FtsProcessor{o}; }).find("cutoff"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { FtsProcessor{o}; }).find("cutoff"), std::string::npos);
 }
 
 TEST(Elevation, FlatGroundAtRestGivesZerosForAnyHeightSlopeAndYaw) {
@@ -192,7 +186,7 @@ TEST(Observation, LayoutScalingAndNames) {
   in.elevation[5] = 100.0;  // absurd: clipped to ten times the maximum expected value
   EXPECT_DOUBLE_EQ(build_observation(in)[kElevationBegin + 5], kObservationClip);
   in.elevation[7] = NAN;
-  EXPECT_NE(message_of([&] { build_observation(in); }).find("elev_RL_1"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { build_observation(in); }).find("elev_RL_1"), std::string::npos);
 }
 
 TEST(Observation, ActionMappingMatchesSection42) {

@@ -10,12 +10,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "test_util.hpp"
 #include "ernest/soil/bekker_wong.hpp"
 #include "ernest/soil/rigid_contact.hpp"
 #include "ernest/soil/single_wheel.hpp"
 #include "reference_bekker_wong.hpp"
 
 using namespace ernest::soil;
+using ernest::testing::invalid_argument_message;
 
 namespace {
 const WheelGeometry kWheel{0.17, 0.13};           // seed 004 Table 1
@@ -29,14 +31,6 @@ bool all_finite(const WheelSoilForce& f) {
          std::isfinite(f.theta_m) && std::isfinite(f.theta_r);
 }
 
-std::string message_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
 }  // namespace
 
 TEST(BekkerWong, NoForceAboveGround) {
@@ -308,20 +302,20 @@ TEST(BekkerWong, BatchEqualsSingle) {
 TEST(Validation, ParameterErrorsNameTheField) {
   SoilParameters p;
   p.cohesion = -5.0;
-  EXPECT_NE(message_of([&] { p.validate(); }).find("SoilParameters.cohesion"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { p.validate(); }).find("SoilParameters.cohesion"), std::string::npos);
   p = SoilParameters{};
   p.shear_modulus_x = 0.0;
-  EXPECT_NE(message_of([&] { BekkerWongModel(p, kWheel); }).find("shear_modulus_x"),
+  EXPECT_NE(invalid_argument_message([&] { BekkerWongModel(p, kWheel); }).find("shear_modulus_x"),
             std::string::npos);
   p = SoilParameters{};
   p.sinkage_exponent = std::nan("");
-  EXPECT_NE(message_of([&] { p.validate(); }).find("sinkage_exponent"), std::string::npos);
-  EXPECT_NE(message_of([&] { BekkerWongModel(SoilParameters{}, WheelGeometry{-0.1, 0.1}); })
+  EXPECT_NE(invalid_argument_message([&] { p.validate(); }).find("sinkage_exponent"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { BekkerWongModel(SoilParameters{}, WheelGeometry{-0.1, 0.1}); })
                 .find("WheelGeometry.radius"),
             std::string::npos);
-  EXPECT_NE(message_of([&] { BekkerWongModel(SoilParameters{}, kWheel, 0); }).find("points_per_panel"),
+  EXPECT_NE(invalid_argument_message([&] { BekkerWongModel(SoilParameters{}, kWheel, 0); }).find("points_per_panel"),
             std::string::npos);
-  EXPECT_NE(message_of([] { SoilParameters::preset("mud"); }).find("dry_sand, m90, wet_sand"),
+  EXPECT_NE(invalid_argument_message([] { SoilParameters::preset("mud"); }).find("dry_sand, m90, wet_sand"),
             std::string::npos);
   for (const std::string& name : SoilParameters::preset_names()) {
     EXPECT_NO_THROW(SoilParameters::preset(name).validate());
@@ -331,11 +325,11 @@ TEST(Validation, ParameterErrorsNameTheField) {
 TEST(Validation, NonFiniteInputsAreRejectedByName) {
   const BekkerWongModel m(SoilParameters::m90(), kWheel);
   const double nan = std::nan(""), inf = INFINITY;
-  EXPECT_NE(message_of([&] { m.evaluate({nan, 0, 0, 0, 0}); }).find("sinkage"), std::string::npos);
-  EXPECT_NE(message_of([&] { m.evaluate({0.01, inf, 0, 0, 0}); }).find("vx"), std::string::npos);
-  EXPECT_NE(message_of([&] { m.evaluate({0.01, 0, nan, 0, 0}); }).find("vy"), std::string::npos);
-  EXPECT_NE(message_of([&] { m.evaluate({0.01, 0, 0, -inf, 0}); }).find("vcx"), std::string::npos);
-  EXPECT_NE(message_of([&] { m.evaluate({0.01, 0, 0, 0, nan}); }).find("vcy"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { m.evaluate({nan, 0, 0, 0, 0}); }).find("sinkage"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { m.evaluate({0.01, inf, 0, 0, 0}); }).find("vx"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { m.evaluate({0.01, 0, nan, 0, 0}); }).find("vy"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { m.evaluate({0.01, 0, 0, -inf, 0}); }).find("vcx"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { m.evaluate({0.01, 0, 0, 0, nan}); }).find("vcy"), std::string::npos);
 }
 
 // ---- single-wheel rig ----
@@ -427,11 +421,11 @@ TEST(Rig, DrawbarPullRisesMonotonicallyWithDrivingSlip) {
 
 TEST(Rig, InvalidArgumentsAreRejected) {
   const BekkerWongModel m(SoilParameters::m90(), kWheel);
-  EXPECT_NE(message_of([&] { solve_equilibrium(m, -1.0, 0.1); }).find("load"), std::string::npos);
-  EXPECT_NE(message_of([&] { solve_equilibrium(m, 100.0, 1.0); }).find("slip"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { solve_equilibrium(m, -1.0, 0.1); }).find("load"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { solve_equilibrium(m, 100.0, 1.0); }).find("slip"), std::string::npos);
   RigOptions o;
   o.carriage_speed = 0.0;
-  EXPECT_NE(message_of([&] { solve_equilibrium(m, 100.0, 0.1, o); }).find("carriage_speed"),
+  EXPECT_NE(invalid_argument_message([&] { solve_equilibrium(m, 100.0, 0.1, o); }).find("carriage_speed"),
             std::string::npos);
 }
 
@@ -453,5 +447,5 @@ TEST(RigidContact, ErpCfmReproduceSpringDamper) {
   }
   RigidContactParameters bad;
   bad.friction_max = 0.1;
-  EXPECT_NE(message_of([&] { bad.validate(); }).find("friction_max"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { bad.validate(); }).find("friction_max"), std::string::npos);
 }

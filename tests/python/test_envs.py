@@ -95,9 +95,11 @@ def test_flat_hard_ground_at_rest_and_driving_straight():
     # 0.1 m/s along the path: 0.05 m per 0.5 s policy step, reward 2 * 0.05 / 0.5 = 0.2
     env.step(np.zeros(3))
     for _ in range(5):
+        before = env.unwrapped.metrics["progress"]
         _, r, _, _, info = env.step(np.zeros(3))
         assert info["progress"] == pytest.approx(0.05, abs=2e-3)
         assert r == pytest.approx(0.2, abs=1e-2)
+        assert info["path_progress"] == pytest.approx(before + info["progress"], abs=1e-9)
 
 
 def test_scripted_controller_returns_to_the_path_and_passive_does_not_steer():
