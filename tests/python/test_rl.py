@@ -314,7 +314,7 @@ def test_corrupt_buffer_gives_clear_error(tmp_path):
 # ----------------------------------------------------------------------------------- training
 def test_td3_learns_point_mass(tmp_path):
     """Fails if the updates are broken: the untrained actor is far from the closed-form optimum."""
-    cfg = small_cfg()
+    cfg = small_cfg(**{"eval.baseline": "{action: [0.0]}"})
     tr = Trainer(cfg, str(tmp_path / "run"))
     before = tr.run_eval()["return"]
     res = tr.train()
@@ -324,6 +324,8 @@ def test_td3_learns_point_mass(tmp_path):
     assert before < best + 0.5 * (zero - best)  # untrained: at least half-way to doing nothing
     assert after > best + 0.15 * (zero - best), (before, after, zero, best)
     assert res["updates"] == 3000 - 500 + 2  # one update per transition after learning_starts
+    # The fixed-action baseline (standing still) on the same seeds has the closed-form return.
+    assert res["baseline"]["return"] == pytest.approx(zero, rel=1e-6)
     rows = open(tmp_path / "run" / "eval.csv").read().splitlines()
     assert len(rows) == 1 + 1 + 3  # header, the manual evaluation, three periodic ones
 
@@ -377,6 +379,24 @@ def test_simulations_in_processes_feed_the_learner_like_in_process(tmp_path):
         tr.close()
     assert torch.equal(weights["sync"][0], weights["async"][0])
     assert np.array_equal(weights["sync"][1], weights["async"][1])
+
+
+@pytest.mark.parametrize("autoreset", ["same", "next"])
+def test_stored_transitions_obey_the_dynamics(tmp_path, autoreset):
+    """With either autoreset convention, every stored (s, a, s') is a real step of the point mass
+    (x' = clip(x + 0.2 a, -2, 2), same target): no reset observation is ever stored as s'."""
+    cfg = small_cfg(**{"env.autoreset": autoreset, "env.num_envs": 3, "td3.hidden": 16,
+                       "total_steps": 300, "random_steps": 300, "learning_starts": 300,
+                       "eval.every_steps": 0, "checkpoint.every_steps": 0})
+    tr = Trainer(cfg, str(tmp_path / autoreset))
+    tr.train()
+    tr.close()
+    b = tr.buffer.chronological()
+    assert len(tr.buffer) == tr.step == 300
+    np.testing.assert_array_equal(b["obs"][:, 1], b["next_obs"][:, 1])
+    x_next = np.clip(b["obs"][:, 0] + 0.2 * b["act"][:, 0], -2, 2)
+    np.testing.assert_allclose(b["next_obs"][:, 0], x_next, atol=1e-6)
+    assert tr.episodes == 30  # 300 transitions of 10-step episodes
 
 
 def test_corrupt_checkpoint_gives_clear_error(tmp_path):
@@ -491,3 +511,38 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
     assert "unknown setting 'td3.batchsize'" in capsys.readouterr().err
     assert scenario_env_id("slope") == "ernest/Slope-v0"
     assert json.loads(json.dumps(C.parse_assignment("a.b=[1, 2]"))) == {"a": {"b": [1, 2]}}
+
+
+# ----------------------------------------------------------------------------------- rover env
+def test_rover_environment_integration(tmp_path):
+    """On ernest/Step-v0 with the C++ vector env (next-step autoreset): the env's own layout and
+    normalisation table drive the noise, an interrupted run resumes exactly, and the passive-bogie
+    baseline is evaluated on the evaluation seeds. (Learning curves are benchmarks, not tests.)"""
+    sets = {"env.scenario": "step", "env.id": "null", "env.num_envs": 2, "td3.hidden": 16,
+            "random_steps": 60, "learning_starts": 60, "total_steps": 200,
+            "eval.every_steps": 0, "eval.episodes": 1, "checkpoint.every_steps": 100,
+            "eval.baseline": "{action: [1, 0, 0], kwargs: {passive: true}}"}
+    cfg = small_cfg(**sets)
+    full = Trainer(cfg, str(tmp_path / "full"))
+    assert full.autoreset == "next" and full.obs_dim == 45 and full.act_dim == 3
+    lay = full.eval_env.unwrapped.observation_layout
+    assert full.layout is lay
+    idx, std = lay.noise_std_normalised()
+    assert sorted(idx.tolist()) == list(range(6, 30))
+    np.testing.assert_allclose(full.buffer.noise_std[np.argsort(full.buffer.noise_idx)],
+                               std[np.argsort(idx)], rtol=1e-6)
+    np.testing.assert_allclose(std[np.argsort(idx)][:3], 10.0 / lay.scale[6:9], rtol=1e-6)
+    res_full = full.train()
+    full.close()
+    assert res_full["baseline"]["length"] > 0
+    part = Trainer(cfg, str(tmp_path / "part"))
+    part.train(total_steps=100)
+    part.close()
+    resumed = Trainer(cfg, str(tmp_path / "part"), resume=True)
+    resumed.train()
+    resumed.close()
+    for a, b in zip(full.agent.actor.parameters(), resumed.agent.actor.parameters()):
+        assert torch.equal(a, b)
+    assert np.array_equal(full.buffer.obs, resumed.buffer.obs)
+    meta = export_actor(full.agent.actor, lay, str(tmp_path / "rover.pt"))
+    assert meta["obs_dim"] == 45 and meta["layout_version"] == lay.version

@@ -72,6 +72,8 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
     lay = L.ObservationLayout.from_dict(specialists[0]["state"]["layout"])
     pool = pool_buffers([s["buffer"] for s in specialists], int(c["per_run"]),
                         int(c["buffer_size"]))
+    for s in specialists:  # the pool holds what is needed; free the full buffers
+        s.pop("buffer", None)
     pool.set_noise(*noise_for(cfg["noise"], lay))
     log(f"  pooled {len(pool)} transitions (capacity {pool.capacity}); noise on "
         f"{pool.noise_idx.size} components")

@@ -4,7 +4,7 @@
     x_{k+1} = clip(x_k + step * a_0, -2, 2), reward -|x_{k+1} - g|, 10 steps (truncation),
     x_0 and g uniform in [-1, 1]; observation (x, g) padded with zeros to ``obs_dim``; extra action
     components are ignored. With ``obs_dim=45, act_dim=3`` it has the ERNEST policy's sizes.
-The optimal return has a closed form (move ``step`` towards g each step), which tests use.
+``info['path_progress']`` is minus the distance to the target. The optimal return has a closed form (move ``step`` towards g each step), which tests use.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ class PointMassEnv(gym.Env):
         self.x = float(np.clip(self.x + self.step_size * a, -2.0, 2.0))
         self.t += 1
         dist = abs(self.x - self.g)
-        return self._obs(), -dist, False, self.t >= self.horizon, {"progress": -dist}
+        return self._obs(), -dist, False, self.t >= self.horizon, {"path_progress": -dist}
 
 
 def optimal_return(x0: float, g: float, horizon: int = 10, step: float = 0.2) -> float:

@@ -79,19 +79,47 @@ def make_env(env_id: str, kwargs: dict | None = None):
     return gym.make(env_id, **(kwargs or {}))
 
 
-def make_vector_env(env_id: str, num_envs: int, mode: str = "sync", kwargs: dict | None = None):
+def make_vector_env(env_id: str, num_envs: int, mode: str = "sync", kwargs: dict | None = None,
+                    threads: int | None = None, autoreset: str = "same"):
+    """Several simulations behind one vector env: ``sync`` (one process), ``async`` (one process
+    each), ``ernest`` (the rover's C++ batched stepper, ``ernest_cpp.envs.make_vec``, stepping in
+    ``threads`` threads with the GIL released) or ``auto`` (ernest for ernest/... ids, else sync). Gymnasium's own vector envs use same-step
+    autoreset unless ``autoreset="next"``; the trainer handles both."""
     import gymnasium as gym
     from gymnasium.vector import AutoresetMode
 
     ensure_registered(env_id)
     if num_envs < 1:
         raise ValueError(f"env.num_envs = {num_envs} must be >= 1")
+    if autoreset not in ("same", "next"):
+        raise ValueError(f"env.autoreset = {autoreset!r}; choose same or next")
+    ar = AutoresetMode.SAME_STEP if autoreset == "same" else AutoresetMode.NEXT_STEP
     fns = [lambda: gym.make(env_id, **(kwargs or {})) for _ in range(num_envs)]
+    if mode == "auto":
+        mode = "ernest" if env_id.startswith("ernest/") else "sync"
     if mode == "sync":
-        return gym.vector.SyncVectorEnv(fns, autoreset_mode=AutoresetMode.SAME_STEP)
+        return gym.vector.SyncVectorEnv(fns, autoreset_mode=ar)
     if mode == "async":
-        return gym.vector.AsyncVectorEnv(fns, autoreset_mode=AutoresetMode.SAME_STEP)
-    raise ValueError(f"env.vector = {mode!r}; choose sync or async")
+        return gym.vector.AsyncVectorEnv(fns, autoreset_mode=ar)
+    if mode == "ernest":
+        if not env_id.startswith("ernest/"):
+            raise ValueError(f"env.vector = ernest needs an ernest/... environment, got {env_id}")
+        from ernest_cpp.envs import make_vec
+
+        return make_vec(env_id, num_envs, threads, **(kwargs or {}))
+    raise ValueError(f"env.vector = {mode!r}; choose auto, sync, async or ernest")
+
+
+def autoreset_mode(vec) -> str:
+    """'same' or 'next' for a vector env (gymnasium's metadata; next-step is its default)."""
+    from gymnasium.vector import AutoresetMode
+
+    mode = getattr(vec, "metadata", {}).get("autoreset_mode", AutoresetMode.NEXT_STEP)
+    if mode == AutoresetMode.SAME_STEP:
+        return "same"
+    if mode == AutoresetMode.NEXT_STEP:
+        return "next"
+    raise ValueError(f"vector env autoreset mode {mode} is not supported (same or next step)")
 
 
 def check_spaces(obs_space, act_space) -> tuple[int, int, np.ndarray, np.ndarray]:
@@ -151,6 +179,16 @@ def to_env_action(a: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarra
     return low + (np.clip(a, -1.0, 1.0) + 1.0) * 0.5 * (high - low)
 
 
+def info_value(info: dict, key: str):
+    """A scalar from an info dict; dotted keys reach nested dicts (episode_metrics.progress)."""
+    v = info
+    for part in key.split("."):
+        if not isinstance(v, dict) or part not in v:
+            return None
+        v = v[part]
+    return float(v) if np.isscalar(v) and not isinstance(v, str) else None
+
+
 def evaluate(policy, env, episodes: int, seed: int, info_keys=()) -> dict:
     """Deterministic episodes with seeds seed, seed+1, ...; mean return, length and info values."""
     _, _, low, high = check_spaces(env.observation_space, env.action_space)
@@ -168,8 +206,9 @@ def evaluate(policy, env, episodes: int, seed: int, info_keys=()) -> dict:
         returns.append(ret)
         lengths.append(n)
         for key in info_keys:
-            if key in info and np.isscalar(info[key]):
-                infos[key].append(float(info[key]))
+            v = info_value(info, key)
+            if v is not None:
+                infos[key].append(v)
     out = {"return": float(np.mean(returns)), "return_std": float(np.std(returns)),
            "length": float(np.mean(lengths))}
     out.update({k: float(np.mean(v)) for k, v in infos.items()})
@@ -229,12 +268,23 @@ def agent_from_checkpoint(ck: dict) -> TD3:
 class Trainer:
     def __init__(self, cfg: dict, run_dir: str, resume: bool = False, log=print):
         self.cfg, self.run_dir, self.log = cfg, run_dir, log
+        self.eval_env = self.vec = None
+        try:
+            self._setup(resume)
+        except BaseException:
+            self.close()  # no orphaned simulation processes on a bad config or checkpoint
+            raise
+
+    def _setup(self, resume: bool) -> None:
+        cfg, run_dir = self.cfg, self.run_dir
         torch.set_num_threads(int(cfg["torch_threads"]))
         self.env_id = resolve_env_id(cfg["env"])
         ec = cfg["env"]
         self.eval_env = make_env(self.env_id, ec.get("kwargs"))
         self.layout = env_layout(self.eval_env)
-        self.vec = make_vector_env(self.env_id, int(ec["num_envs"]), ec["vector"], ec.get("kwargs"))
+        self.vec = make_vector_env(self.env_id, int(ec["num_envs"]), ec["vector"], ec.get("kwargs"),
+                                   ec.get("threads"), ec.get("autoreset", "same"))
+        self.autoreset = autoreset_mode(self.vec)
         self.n = self.vec.num_envs
         self.obs_dim, self.act_dim, self.low, self.high = check_spaces(
             self.vec.single_observation_space, self.vec.single_action_space)
@@ -275,6 +325,7 @@ class Trainer:
     def _reset_envs(self) -> np.ndarray:
         obs, _ = self.vec.reset(seed=self._reset_seeds())
         self.exploration.reset()
+        self.pending_reset = np.zeros(self.n, bool)  # next-step autoreset: no transition next step
         self.ep_ret = np.zeros(self.n)
         self.ep_len = np.zeros(self.n, np.int64)
         return np.asarray(obs, np.float32)
@@ -375,6 +426,37 @@ class Trainer:
             fh.write(",".join(f"{res[k]:.6g}" for k in keys) + "\n")
         return res
 
+    def run_baseline(self) -> dict | None:
+        """Fixed-action episodes on the evaluation seeds (e.g. the passive-bogie baseline of
+        seed 004 Table 6: full forward speed, gimbal still), computed once per run."""
+        spec = self.cfg["eval"].get("baseline")
+        if not spec:
+            return None
+        path = os.path.join(self.run_dir, "baseline.json")
+        if os.path.exists(path):
+            with open(path) as fh:
+                return json.load(fh)
+        if not isinstance(spec, dict) or "action" not in spec:
+            raise ValueError("eval.baseline must be a mapping with 'action' (and optional 'kwargs')")
+        action = np.asarray(spec["action"], np.float64).reshape(-1)
+        if action.shape != (self.act_dim,) or np.any(np.abs(action) > 1):
+            raise ValueError(f"eval.baseline.action must have {self.act_dim} values in [-1, 1], "
+                             f"got {spec['action']}")
+        kwargs = dict(self.cfg["env"].get("kwargs") or {})
+        kwargs.update(spec.get("kwargs") or {})
+        env = make_env(self.env_id, kwargs)
+        ev = self.cfg["eval"]
+        try:
+            res = evaluate(lambda obs: action, env, int(ev["episodes"]), int(ev["seed"]),
+                           ev.get("info_keys") or ())
+        finally:
+            env.close()
+        res["action"] = action.tolist()
+        with open(path + ".tmp", "w") as fh:
+            json.dump(res, fh, indent=1)
+        os.replace(path + ".tmp", path)
+        return res
+
     def train(self, total_steps: int | None = None) -> dict:
         cfg = self.cfg
         total = int(total_steps if total_steps is not None else cfg["total_steps"])
@@ -384,6 +466,11 @@ class Trainer:
         random_steps, starts = int(cfg["random_steps"]), int(cfg["learning_starts"])
         ev_every, ck_every = int(cfg["eval"]["every_steps"]), int(cfg["checkpoint"]["every_steps"])
         log_every = int(cfg["log"]["every_steps"])
+        baseline = self.run_baseline()
+        if baseline and writer:
+            for key, v in baseline.items():
+                if key != "action":
+                    writer.add_scalar(f"eval/baseline_{key}", v, self.step)
         obs = self._reset_envs()
         stats = collections.defaultdict(list)
         t0, s0, last_ck = time.perf_counter(), self.step, self.step
@@ -395,15 +482,27 @@ class Trainer:
             env_a = to_env_action(a, self.low, self.high).astype(self.vec.single_action_space.dtype)
             nxt, r, term, trunc, info = self.vec.step(env_a)
             nxt = np.asarray(nxt, np.float32)
+            r = np.asarray(r, np.float64)
             done = np.logical_or(term, trunc)
-            real_next = nxt.copy()
-            if done.any():
-                fo = info["final_obs"]
-                for i in np.flatnonzero(done):
-                    real_next[i] = fo[i]
-            self.buffer.add(obs, a, r, real_next, term)
-            self.ep_ret += r
-            self.ep_len += 1
+            if self.autoreset == "same":
+                valid = np.ones(self.n, bool)
+                real_next = nxt.copy()
+                if done.any():
+                    fo = info["final_obs"]
+                    for i in np.flatnonzero(done):
+                        real_next[i] = fo[i]
+            else:  # next-step: obs at `done` is the final one; the step after it only resets
+                valid = ~self.pending_reset
+                real_next = nxt
+                done = done & valid
+                self.pending_reset = done.copy()
+            if valid.all():
+                self.buffer.add(obs, a, r, real_next, term)
+            elif valid.any():
+                self.buffer.add(obs[valid], a[valid], r[valid], real_next[valid],
+                                np.asarray(term)[valid])
+            self.ep_ret += np.where(valid, r, 0.0)
+            self.ep_len += valid
             for i in np.flatnonzero(done):
                 self.recent.append(float(self.ep_ret[i]))
                 self.episodes += 1
@@ -411,13 +510,14 @@ class Trainer:
                     writer.add_scalar("train/episode_return", self.ep_ret[i], self.step)
                     writer.add_scalar("train/episode_length", self.ep_len[i], self.step)
                 self.ep_ret[i], self.ep_len[i] = 0.0, 0
-            if done.any():
-                self.exploration.reset(done)
+            if done.any() or not valid.all():  # episodes start in the POLICY state (§4.4)
+                self.exploration.reset(done | ~valid)
             obs = nxt
             prev = self.step
-            self.step += self.n
+            added = int(valid.sum())
+            self.step += added
             if self.step >= starts and len(self.buffer) >= 1:
-                self.update_acc += self.n * ups
+                self.update_acc += added * ups
                 k = int(self.update_acc)
                 self.update_acc -= k
                 for _ in range(k):
@@ -442,6 +542,9 @@ class Trainer:
                     for key, v in res.items():
                         if key != "step":
                             writer.add_scalar(f"eval/{key}", v, self.step)
+                    for key, v in (baseline or {}).items():  # flat reference line on the plots
+                        if key != "action":
+                            writer.add_scalar(f"eval/baseline_{key}", v, self.step)
             if ck_every > 0 and self.step // ck_every > prev // ck_every:
                 obs = self._checkpoint_and_cut()
                 last_ck = self.step
@@ -452,7 +555,7 @@ class Trainer:
             writer.close()
         return {"step": self.step, "updates": self.agent.updates, "episodes": self.episodes,
                 "recent_return": float(np.mean(self.recent)) if self.recent else math.nan,
-                "last_eval": self.last_eval}
+                "last_eval": self.last_eval, "baseline": baseline}
 
     def _checkpoint_and_cut(self) -> np.ndarray:
         self.segment += 1  # saved with the new segment: a resume resets exactly like we do now
@@ -460,8 +563,10 @@ class Trainer:
         return self._reset_envs()
 
     def close(self) -> None:
-        self.vec.close()
-        self.eval_env.close()
+        for env in (self.vec, self.eval_env):
+            if env is not None:
+                env.close()
+        self.vec = self.eval_env = None
 
 
 def _writer(path: str):
