@@ -26,6 +26,7 @@ using Mat3 = Eigen::Matrix3d;
 constexpr int kChassis = 0, kBogie = 1;
 constexpr int kMaxObstacleContacts = 64;
 constexpr int kMaxContactsPerPair = 4;
+const char* const kBodyNames[6] = {"chassis", "bogie", "wheel FL", "wheel FR", "wheel RL", "wheel RR"};
 
 void init_ode_once() {
   static std::once_flag flag;
@@ -238,6 +239,7 @@ struct RoverSim::Impl {
   void near(dGeomID a, dGeomID b);
   void read_outputs(double dt_done);
   void check_divergence();
+  void check_forces_before_step();
   void step();
 };
 
@@ -687,6 +689,10 @@ void RoverSim::Impl::step() {
     dBodyAddForce(body[kChassis], pending_force.x(), pending_force.y(), pending_force.z());
     pending_force.setZero();
   }
+  // ODE aborts the process (an assertion in its quaternion normalisation) when a step produces a
+  // non-finite state, so absurd inputs are refused before the step: the divergence check after
+  // it only has to catch finite but absurd states.
+  check_forces_before_step();
   // dWorldStep (Dantzig LCP), not dWorldQuickStep: QuickStep reorders constraints with ODE's
   // process-wide random generator (runs are not reproducible) and at equal accuracy (~50
   // iterations) it is no faster for this 6-body rover (benchmarks/RESULTS.md).
@@ -795,8 +801,26 @@ void RoverSim::Impl::read_outputs(double dt) {
   for (double pw : st.motor_power) st.energy += std::max(pw, 0.0) * dt;
 }
 
+void RoverSim::Impl::check_forces_before_step() {
+  constexpr double kMaxForce = 1e8;  // [N] and [N m]; 1e6 x the rover's weight
+  for (int b = 0; b < 6; ++b) {
+    const Vec3 f = to_vec(dBodyGetForce(body[b])), t = to_vec(dBodyGetTorque(body[b]));
+    if (f.allFinite() && t.allFinite() && f.norm() <= kMaxForce && t.norm() <= kMaxForce) continue;
+    diverged = true;
+    for (auto id : body) {
+      dBodySetForce(id, 0, 0, 0);
+      dBodySetTorque(id, 0, 0, 0);
+    }
+    dJointGroupEmpty(contacts);
+    std::ostringstream os;
+    os << "SimulationDiverged at t = " << st.time << " s: applied force " << f.norm()
+       << " N / torque " << t.norm() << " N m on the " << kBodyNames[b] << " is non-finite or above "
+       << kMaxForce << "; restore a snapshot or reset";
+    throw SimulationDiverged(os.str());
+  }
+}
+
 void RoverSim::Impl::check_divergence() {
-  static const char* names[6] = {"chassis", "bogie", "wheel FL", "wheel FR", "wheel RL", "wheel RR"};
   for (int b = 0; b < 6; ++b) {
     const Vec3 x = pos(b), v = to_vec(dBodyGetLinearVel(body[b])),
                w = to_vec(dBodyGetAngularVel(body[b]));
@@ -814,7 +838,7 @@ void RoverSim::Impl::check_divergence() {
     if (!what.empty()) {
       diverged = true;
       std::ostringstream os;
-      os << "SimulationDiverged at t = " << st.time << " s: " << names[b] << " " << what
+      os << "SimulationDiverged at t = " << st.time << " s: " << kBodyNames[b] << " " << what
          << " (dt = " << opt.dt << " s); restore a snapshot or reset";
       throw SimulationDiverged(os.str());
     }

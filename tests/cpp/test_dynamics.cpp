@@ -499,3 +499,17 @@ TEST(GimbalSuspension, ClutchAlignsTheBogieFrameAtBoundedSpeedBeforeEngaging) {
   EXPECT_GE(steps * sim.options().dt, (std::abs(frame0 - bogie0) - 0.02) / p.clutch_align_speed);
   EXPECT_NEAR(sim.state().bogie_frame_angle, sim.state().gimbal_roll, p.clutch_align_tolerance);
 }
+
+TEST(Divergence, NonFiniteOrHugeForceIsRefusedBeforeOdeSeesIt) {
+  // ODE aborts the process on a non-finite state inside its step; the simulator must raise
+  // instead, and leave a state that restore() recovers from.
+  auto sim = rock_field(2);
+  sim->step_n(5);
+  const Snapshot s = sim->snapshot();
+  sim->apply_chassis_force(Eigen::Vector3d(0.0, 0.0, 1e300));
+  EXPECT_THROW(sim->step(), SimulationDiverged);
+  EXPECT_THROW(sim->step(), SimulationDiverged);
+  sim->restore(s);
+  EXPECT_NO_THROW(sim->step_n(5));
+  EXPECT_THROW(sim->apply_chassis_force(Eigen::Vector3d(NAN, 0.0, 0.0)), std::invalid_argument);
+}
