@@ -1,0 +1,75 @@
+#include "ernest/runtime/sim_interface.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "ernest/common/validation.hpp"
+#include "ernest/envs/terrain_source.hpp"
+
+namespace ernest::runtime {
+
+SimRoverInterface::SimRoverInterface(dynamics::RoverSim& sim, const sensing::HeightSource& heights,
+                                     double sensor_rate)
+    : sim_(sim), heights_(&heights), rate_(sensor_rate), t0_(sim.state().time) {
+  init();
+}
+
+SimRoverInterface::SimRoverInterface(envs::RoverEnv& env, double sensor_rate)
+    : sim_(env.sim()),
+      owned_heights_(std::make_unique<envs::TerrainHeightSource>(env.scenario().terrain,
+                                                                 env.scenario().obstacles)),
+      heights_(owned_heights_.get()),
+      rate_(sensor_rate),
+      t0_(env.sim().state().time) {
+  init();
+}
+
+void SimRoverInterface::init() {
+  require_positive("SimRoverInterface", "sensor_rate", rate_);
+  const double per = rate_ * sim_.options().dt;
+  ticks_per_step_ = static_cast<int>(std::lround(per));
+  require(ticks_per_step_ >= 1 && std::abs(per - ticks_per_step_) < 1e-9,
+          "SimRoverInterface: sensor_rate * dt = " + std::to_string(per) +
+              " must be a whole number of ticks per physics step");
+}
+
+double SimRoverInterface::now() const { return t0_ + static_cast<double>(ticks_) / rate_; }
+
+const SensorFrame& SimRoverInterface::read() {
+  const dynamics::RoverState& s = sim_.state();
+  SensorFrame& f = frame_;
+  f.fts_stamp = f.pose_stamp = f.joint_stamp = s.time;
+  for (int i = 0; i < 4; ++i) f.fts.row(i) = s.fts[i].transpose();
+  f.position = s.position;
+  f.orientation = Eigen::Quaterniond(s.quaternion[0], s.quaternion[1], s.quaternion[2], s.quaternion[3]);
+  f.roll = s.roll;
+  f.pitch = s.pitch;
+  f.yaw = s.yaw;
+  f.body_angular_velocity = s.body_angular_velocity;
+  f.gimbal_yaw = s.gimbal_yaw;
+  f.gimbal_roll = s.gimbal_roll;
+  f.wheel_speed = s.wheel_speed;
+  f.wheel_load = s.wheel_load;
+  f.power = 0.0;
+  for (double p : s.motor_power) f.power += p;
+  f.energy = s.energy;
+  f.roll_torque = s.roll_torque;
+  return f;
+}
+
+void SimRoverInterface::command(const ActuatorCommand& c) {
+  dynamics::Commands k;
+  k.wheel_speed = c.wheel_speed;
+  k.yaw_rate = c.yaw_rate;
+  k.roll_rate = c.roll_rate;
+  k.gimbal_enabled = c.gimbal_enabled;
+  k.clutch_engage = c.clutch_engage;
+  sim_.set_commands(k);
+}
+
+void SimRoverInterface::wait_next_tick() {
+  ++ticks_;
+  if (ticks_ % ticks_per_step_ == 0) sim_.step();
+}
+
+}  // namespace ernest::runtime

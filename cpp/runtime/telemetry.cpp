@@ -1,0 +1,40 @@
+#include "ernest/runtime/telemetry.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace ernest::runtime {
+
+const char* Telemetry::header() {
+  return "time,x,y,z,roll,pitch,yaw,gimbal_yaw,gimbal_roll,"
+         "load_fl,load_fr,load_rl,load_rr,action_vx,action_yaw,action_roll,"
+         "cmd_vx,cmd_yaw_rate,cmd_roll_rate,power,energy,fault";
+}
+
+Telemetry::Telemetry(const std::string& path) {
+  file_ = std::fopen(path.c_str(), "w");
+  if (!file_) throw std::runtime_error("telemetry: cannot open " + path + ": " + std::strerror(errno));
+  std::fprintf(file_, "%s\n", header());
+}
+
+Telemetry::~Telemetry() {
+  if (file_) std::fclose(file_);
+}
+
+void Telemetry::record(const TelemetryRow& r) {
+  static const SensorFrame empty{};
+  const SensorFrame& f = r.frame ? *r.frame : empty;
+  std::fprintf(file_,
+               "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
+               "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n",
+               r.time, f.position.x(), f.position.y(), f.position.z(), f.roll, f.pitch, f.yaw,
+               f.gimbal_yaw, f.gimbal_roll, f.wheel_load[0], f.wheel_load[1], f.wheel_load[2],
+               f.wheel_load[3], r.action[0], r.action[1], r.action[2], r.command[0], r.command[1],
+               r.command[2], f.power, f.energy, r.fault);
+  ++rows_;
+}
+
+void Telemetry::flush() { std::fflush(file_); }
+
+}  // namespace ernest::runtime
