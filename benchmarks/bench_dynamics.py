@@ -79,8 +79,9 @@ def mjcf(p: D.RoverParameters, dt: float) -> str:
 def main():
     print(f"machine: {platform.processor() or platform.machine()}, python {platform.python_version()}")
     p = D.RoverParameters()
-    steps = 500
-    ours = {}
+    steps, repeats = 500, 11
+    dt = D.SimOptions().dt
+    sims = {}
     for ground in ("rigid", "soil"):
         sim = D.make_sim(ground, friction=0.8)
         sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.15)
@@ -88,28 +89,40 @@ def main():
         c.wheel_speed = [0.15 / p.wheel_radius] * 4
         sim.set_commands(c)
         sim.step_n(50)
-        ours[ground] = median_us(lambda: sim.step_n(steps), steps)
-    dt = D.SimOptions().dt
-    print(f"ours (ODE), dt = {dt} s: rigid ground {ours['rigid']:.2f} us/step, "
-          f"M90 soil {ours['soil']:.2f} us/step")
+        sims[ground] = sim
     try:
         import mujoco
     except ImportError:
+        mujoco = None
         print("mujoco not installed (pip install mujoco): comparison skipped")
+    if mujoco is not None:
+        model = mujoco.MjModel.from_xml_string(mjcf(p, dt))
+        data = mujoco.MjData(model)
+        data.ctrl[:4] = 0.15 / p.wheel_radius
+        mujoco.mj_step(model, data, 50)
+        x0 = float(data.qpos[0])
+    # Interleaved repeats (ours rigid, ours soil, MuJoCo) so that load changes on a shared machine
+    # hit all three alike; medians of the per-repeat times and of the per-repeat ratios.
+    t = {"rigid": [], "soil": [], "mujoco": []}
+    for _ in range(repeats):
+        for ground, sim in sims.items():
+            t[ground].append(median_us(lambda: sim.step_n(steps), steps, repeats=1))
+        if mujoco is not None:
+            t["mujoco"].append(median_us(lambda: mujoco.mj_step(model, data, steps), steps, repeats=1))
+    med = {k: statistics.median(v) for k, v in t.items() if v}
+    print(f"ours (ODE), dt = {dt} s: rigid ground {med['rigid']:.2f} us/step, "
+          f"M90 soil {med['soil']:.2f} us/step")
+    if mujoco is None:
         return 0
-    model = mujoco.MjModel.from_xml_string(mjcf(p, dt))
-    data = mujoco.MjData(model)
-    data.ctrl[:4] = 0.15 / p.wheel_radius
-    mujoco.mj_step(model, data, 50)
-    x0 = float(data.qpos[0])
-    mj = median_us(lambda: mujoco.mj_step(model, data, steps), steps)
     if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0 or data.qpos[0] - x0 < 1.0:
         print("MuJoCo run was unstable or did not drive: comparison invalid")
         return 1
-    print(f"MuJoCo {mujoco.__version__}, same rover, rigid contacts, dt = {dt} s: {mj:.2f} us/step "
-          f"(travelled {data.qpos[0]:.2f} m)")
-    print(f"ratio ours / MuJoCo: rigid {ours['rigid'] / mj:.2f}, M90 soil {ours['soil'] / mj:.2f} "
-          f"(target <= 1.0)")
+    print(f"MuJoCo {mujoco.__version__}, same rover, rigid contacts, dt = {dt} s: "
+          f"{med['mujoco']:.2f} us/step (travelled {data.qpos[0] - x0:.2f} m)")
+    r_rigid = statistics.median(a / b for a, b in zip(t["rigid"], t["mujoco"]))
+    r_soil = statistics.median(a / b for a, b in zip(t["soil"], t["mujoco"]))
+    print(f"ratio ours / MuJoCo (median of {repeats} interleaved repeats): rigid {r_rigid:.2f}, "
+          f"M90 soil {r_soil:.2f} (target <= 1.0)")
     return 0
 
 
