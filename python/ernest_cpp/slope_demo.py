@@ -16,6 +16,8 @@ import os
 import numpy as np
 
 from . import dynamics as D
+from . import soil as _soil
+from ._core import envs as _envs
 
 SLOPE_DEG = 20.0
 
@@ -27,13 +29,18 @@ def _terrain(slope_deg: float) -> D.HeightMap:
 
 def run(controller: str, soil: str = "m90", duration: float = 60.0, vx: float = 0.1,
         slope_deg: float = SLOPE_DEG, period: float = 8.0, yaw_amp_deg: float = 20.0,
-        roll_amp_deg: float = 6.0) -> dict[str, np.ndarray | float | str]:
-    """Simulate one controller ('passive' or 'gimbal'); returns time series and the metrics."""
+        roll_amp_deg: float = 6.0, eps_slip: float | None = None) -> dict[str, np.ndarray | float | str]:
+    """Simulate one controller ('passive' or 'gimbal'); returns time series and the metrics.
+
+    ``eps_slip`` (eq 12's regularisation) defaults to the environments' value (1e4 (m/s)^-2, see
+    ``EnvOptions.eps_slip``) so this demo and ``ernest evaluate`` agree; 100 is Table 2's."""
     if controller not in ("passive", "gimbal"):
         raise ValueError(f"controller must be 'passive' or 'gimbal', got {controller!r}")
     if duration <= 0 or vx <= 0:
         raise ValueError("duration and vx must be > 0")
-    sim = D.make_sim("soil", terrain=_terrain(slope_deg), soil=soil)
+    params = _soil.soil_preset(soil)
+    params.eps_slip = _envs.EnvOptions().eps_slip if eps_slip is None else float(eps_slip)
+    sim = D.make_sim("soil", terrain=_terrain(slope_deg), soil=params)
     # Rolling start at the commanded speed: under eq 12's slip regularisation a wheel cannot build
     # slip from rest (see benchmarks/RESULTS.md, dynamics).
     sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, vx)
@@ -135,7 +142,8 @@ def main_args(args: argparse.Namespace) -> int:
              "CoT E/(m g d) | E/(m d) [J/(kg m)] |", "|---|---|---|---|---|---|---|---|"]
     all_runs = {}
     for soil in soils:
-        runs = [run(c, soil, args.duration, args.vx) for c in ("passive", "gimbal")]
+        runs = [run(c, soil, args.duration, args.vx, eps_slip=args.eps_slip)
+                for c in ("passive", "gimbal")]
         all_runs[soil] = runs
         for r in runs:
             m_d = D.RoverParameters().total_mass() * r["actual"]
@@ -174,4 +182,7 @@ def add_parser(subparsers) -> None:
                    help="comma-separated soil presets (default m90,dry_sand)")
     p.add_argument("--duration", type=float, default=60.0, help="simulated seconds (default 60)")
     p.add_argument("--vx", type=float, default=0.1, help="commanded forward speed [m/s]")
+    p.add_argument("--eps-slip", type=float, default=None,
+                   help="eq 12 slip regularisation [(m/s)^-2] (default: the environments' 1e4; "
+                        "Table 2's is 100)")
     p.set_defaults(func=main_args)
