@@ -121,6 +121,7 @@ void bind_envs(py::module_& m) {
       .def_readwrite("soil", &EnvOptions::soil, "'dry_sand', 'm90' or 'wet_sand'")
       .def_readwrite("rigid_ground", &EnvOptions::rigid_ground)
       .def_readwrite("eps_slip", &EnvOptions::eps_slip, "eq 12 regularisation [(m/s)^-2]")
+      .def_readwrite("eps_motion", &EnvOptions::eps_motion, "eq 16 rest threshold [m/s]")
       .def_readwrite("passive", &EnvOptions::passive, "gimbal off, clutch open")
       .def_readwrite("physics_dt", &EnvOptions::physics_dt, "[s], 0 = simulator default")
       .def_readwrite("policy_dt", &EnvOptions::policy_dt, "[s]")

@@ -22,6 +22,7 @@ void EnvOptions::validate() const {
   require_in_range(o, "fts_noise_torque", fts_noise_torque, 0.0, 1e3);
   require_in_range(o, "start_speed", start_speed, 0.0, 0.5);
   require_in_range(o, "eps_slip", eps_slip, -1.0, 1e8);
+  require_in_range(o, "eps_motion", eps_motion, -1.0, 1.0);
   scales.validate();
   weights.validate();
   limits.validate();
@@ -42,6 +43,7 @@ RoverEnv::RoverEnv(const dynamics::RoverParameters& params, const EnvOptions& op
   sim_options_.ground = options_.rigid_ground ? dynamics::GroundType::Rigid : dynamics::GroundType::Soil;
   sim_options_.soil = soil::SoilParameters::preset(options_.soil);
   if (options_.eps_slip > 0.0) sim_options_.soil.eps_slip = options_.eps_slip;
+  if (options_.eps_motion > 0.0) sim_options_.soil.eps_motion = options_.eps_motion;
   if (options_.physics_dt > 0.0) sim_options_.dt = options_.physics_dt;
   sim_options_.validate();
   const double dt = sim_options_.dt;
