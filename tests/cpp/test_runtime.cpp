@@ -466,6 +466,43 @@ TEST(Watchdog, FailedInferenceCommandsZeroAndTheLoopKeepsRunning) {
   EXPECT_LT(env.sim().state().linear_velocity.head<2>().norm(), 0.01);
 }
 
+// Joint limits inside the loop: a policy that keeps commanding +15 deg/s of gimbal yaw drives the
+// joint to its 45 deg stop (RoverParameters::yaw_limit) when limiting is off, and stops it one
+// margin short of the stop when it is on; the observation then reports the cut rate as the
+// action in force.
+TEST(OnboardLoop, JointLimitsStopTheGimbalShortOfItsStop) {
+  const dynamics::RoverParameters params;
+  auto run = [&](double margin, Eigen::Vector3d* last_command, sensing::ActionVector* last_action) {
+    envs::RoverEnv env(params, flat_options(30.0));
+    env.reset(2);
+    runtime::Policy policy(constant_policy("yawing", {0.05, 0.2618, 0.0}));
+    runtime::SimRoverInterface io(env);
+    runtime::LoopOptions lo = runtime::LoopOptions::from_env(env);
+    lo.limits.joint_margin = margin;
+    runtime::ControlLoop loop(io, policy, params, env.scenario().path, lo);
+    loop.set_fts_bias(env.fts_bias());
+    double max_psi = 0.0;
+    for (int k = 0; k < 5 * 400; ++k) {
+      loop.tick();
+      max_psi = std::max(max_psi, env.sim().state().gimbal_yaw);
+    }
+    if (last_command) *last_command = loop.command();
+    if (last_action) *last_action = loop.action();
+    return max_psi;
+  };
+  const double free_psi = run(-1.0, nullptr, nullptr);
+  EXPECT_GT(free_psi, params.yaw_limit - 0.01) << "without limiting the joint reaches its stop";
+  Eigen::Vector3d cmd;
+  sensing::ActionVector act;
+  const double margin = 0.035;
+  const double limited_psi = run(margin, &cmd, &act);
+  EXPECT_LT(limited_psi, params.yaw_limit - margin + 0.2618 * 0.025 + 1e-3);  // <= one physics step late
+  EXPECT_GT(limited_psi, params.yaw_limit - margin - 0.01);
+  EXPECT_EQ(cmd[1], 0.0);
+  EXPECT_NEAR(cmd[0], 0.05, 1e-9);  // driving continues
+  EXPECT_NEAR(act[1], 0.0, 1e-12);  // the observation reports the rate actually applied
+}
+
 // The onboard loop (400 Hz sensor ticks, FTS filter per sample, policy at 2 Hz, synchroniser)
 // on the simulator makes exactly the decisions of the environments' episode core for the same
 // seed and policy: the same filter, observation and synchroniser code, in the same order.
