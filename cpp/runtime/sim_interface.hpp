@@ -19,7 +19,8 @@ class SimRoverInterface : public RoverInterface {
   SimRoverInterface(dynamics::RoverSim& sim, const sensing::HeightSource& heights,
                     double sensor_rate = 400.0);
   /// The simulator of `env`'s current episode (call env.reset(seed) first); heights from its
-  /// scenario (terrain and rocks, the stand-in for the stereo elevation map of §2.4).
+  /// scenario (terrain and rocks, the stand-in for the stereo elevation map of §2.4). Valid until
+  /// the env's next reset, which replaces the simulator.
   explicit SimRoverInterface(envs::RoverEnv& env, double sensor_rate = 400.0);
 
   double now() const override;
