@@ -59,6 +59,15 @@ def exported(tmp_path_factory):
     return actor, lay, path
 
 
+@pytest.fixture
+def one_thread():
+    """Python torch on one intra-op thread like the runtime (restored afterwards)."""
+    old = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(old)
+
+
 def python_episode(policy, scenario: str, seed: int, duration: float):
     """The Python path: ErnestEnv, physical observation -> policy (torch, float32) -> physical
     command -> sensing.command_to_action -> env.step, until the episode ends. Returns the actions,
@@ -88,9 +97,9 @@ def cpp_episode(path, scenario, seed, duration, tmp_path, mode="env"):
 
 
 @pytest.mark.parametrize("scenario,seed", [("rockfield", 3), ("step", 8), ("ripples", 2)])
-def test_parity_python_actor_vs_cpp_runtime_whole_episode(exported, tmp_path, scenario, seed):
+def test_parity_python_actor_vs_cpp_runtime_whole_episode(exported, tmp_path, one_thread, scenario,
+                                                           seed):
     actor, lay, path = exported
-    torch.set_num_threads(1)
     python_actor = ExportedPolicy(actor, lay, L.POLICY_RATE_HZ).eval()  # eager, not TorchScript
     duration = 10.0
     py, _, metrics, info = python_episode(python_actor, scenario, seed, duration)
@@ -116,7 +125,7 @@ def test_parity_python_actor_vs_cpp_runtime_whole_episode(exported, tmp_path, sc
     np.testing.assert_allclose(rows["action_vx"], cpp[:, 0], atol=1e-12)
 
 
-def test_parity_python_torchscript_module_vs_cpp_runtime(exported, tmp_path):
+def test_parity_python_torchscript_module_vs_cpp_runtime(exported, tmp_path, one_thread):
     # The exported file itself, run by Python torch, gives the C++ runtime's actions too.
     _, _, path = exported
     module, _ = load_policy(path)
@@ -125,7 +134,7 @@ def test_parity_python_torchscript_module_vs_cpp_runtime(exported, tmp_path):
     np.testing.assert_allclose(cpp, py, rtol=0, atol=1e-5)
 
 
-def test_same_observations_same_actions_as_the_numpy_reference(exported, tmp_path):
+def test_same_observations_same_actions_as_the_numpy_reference(exported, tmp_path, one_thread):
     # Open loop: the observations of a Python episode through the export's numpy reference path
     # (float64 normalisation, Python actor) and through the C++ runtime (--replay).
     actor, lay, path = exported
