@@ -8,6 +8,9 @@ The reference measured in the same run is the dense-matmul floor: the time the i
 products (counted analytically) would take at the GEMM rate measured here on 512×512×512 products.
 
     python benchmarks/bench_consolidation.py [--pool 4000000] [--threads 2] [--iterations 300]
+
+OMP_WAIT_POLICY defaults to PASSIVE as in the ``ernest`` commands; run with OMP_WAIT_POLICY=ACTIVE
+to see what spinning OpenMP threads cost on a shared machine.
 """
 
 from __future__ import annotations
@@ -17,12 +20,15 @@ import os
 import statistics
 import time
 
-import numpy as np
-import torch
+# As `ernest consolidate` does (rl/commands.py): idle OpenMP threads sleep rather than spin.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-from ernest_cpp.rl import layout as L
-from ernest_cpp.rl.replay import ReplayBuffer
-from ernest_cpp.rl.td3 import TD3, TD3Config
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+
+from ernest_cpp.rl import layout as L  # noqa: E402
+from ernest_cpp.rl.replay import ReplayBuffer  # noqa: E402
+from ernest_cpp.rl.td3 import TD3, TD3Config  # noqa: E402
 
 FULL_ITERATIONS = 10_000  # Table 4
 TARGET_S = 15 * 60  # SPEC performance bar
@@ -80,7 +86,8 @@ def main() -> None:
     pool = synthetic_pool(args.pool, 45, 3)
     print(f"synthetic pool: {len(pool)} transitions of 45/3 values "
           f"({(pool.obs.nbytes * 2 + pool.act.nbytes) / 2**30:.2f} GiB) in "
-          f"{time.perf_counter() - t:.1f} s; torch threads {torch.get_num_threads()}")
+          f"{time.perf_counter() - t:.1f} s; torch threads {torch.get_num_threads()}, "
+          f"OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY')}")
     cfg = TD3Config(batch_size=512, actor_lr=1e-3, critic_lr=1e-3, hidden=512)
     agent = TD3(45, 3, cfg, seed=0)
     rng = np.random.default_rng(1)

@@ -11,6 +11,13 @@ import os
 import re
 
 
+def _passive_openmp() -> None:
+    """Idle OpenMP threads sleep instead of spinning (before torch loads its OpenMP runtime). On a
+    machine whose cores are shared with other processes, spinning made 2-thread TD3 updates ~5×
+    slower (benchmarks/RESULTS.md, consolidation); an explicit OMP_WAIT_POLICY is respected."""
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+
 def _settings_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preset", default="quick", choices=("quick", "paper"),
                    help="base settings (python/ernest_cpp/rl/presets/<preset>.yaml)")
@@ -27,6 +34,7 @@ def _build(args, extra: dict | None = None) -> dict:
 
 
 def _train(args) -> int:
+    _passive_openmp()
     from .trainer import Trainer, resolve_env_id
 
     extra: dict = {}
@@ -70,6 +78,7 @@ def _train(args) -> int:
 
 
 def _consolidate(args) -> int:
+    _passive_openmp()
     from .consolidate import consolidate_runs
 
     cfg = _build(args)
@@ -82,6 +91,7 @@ def _consolidate(args) -> int:
 
 
 def _export(args) -> int:
+    _passive_openmp()
     from . import layout as L
     from .export import export_actor
     from .trainer import agent_from_checkpoint, load_checkpoint
