@@ -279,6 +279,9 @@ def test_last_n_and_merge():
     pooled = pool_buffers([a, b], per_run=40)
     np.testing.assert_array_equal(pooled.chronological()["rew"],
                                   np.concatenate([np.arange(260, 300), 1010 + np.arange(40)]))
+    assert pooled.capacity == 80  # allocated for what was pooled, not for buffer_size
+    with pytest.raises(ValueError, match="exceed buffer_size"):
+        pool_buffers([a, b], per_run=40, capacity=79)
     merged = ReplayBuffer.merge([a, b])
     assert len(merged) == 250
     np.testing.assert_array_equal(merged.chronological()["obs"][200:], b.chronological()["obs"])

@@ -35,7 +35,7 @@ def pool_buffers(sources: list, per_run: int, capacity: int | None = None) -> Re
     total = sum(len(p) for p in parts)
     if capacity is not None and total > capacity:
         raise ValueError(f"consolidate: pooled {total} transitions exceed buffer_size {capacity}")
-    return ReplayBuffer.merge(parts, capacity)
+    return ReplayBuffer.merge(parts)  # sized to what was pooled (the pool never grows)
 
 
 def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, seed: int = 0,
