@@ -183,3 +183,29 @@ def test_evaluate_command_writes_a_report(tmp_path, capsys):
     for name in ("paths.png", "slope_gait.png", "metrics.png"):
         assert (out / name).stat().st_size > 1000
     assert "[10/10]" in capsys.readouterr().out
+
+
+def test_evaluate_runs_an_exported_policy(tmp_path):
+    # A randomly initialised actor exported like a trained one: the evaluator feeds it physical
+    # observations (obs * scale) and maps its physical command back to a normalised action.
+    import torch
+
+    from ernest_cpp.evaluate import controllers
+    from ernest_cpp.rl.export import export_actor, load_policy
+    from ernest_cpp.rl.networks import Actor
+
+    torch.manual_seed(0)
+    env = E.ErnestEnv("slope")
+    path = str(tmp_path / "policy.pt")
+    export_actor(Actor(45, 3, 64), env.observation_layout, path)
+    policy, passive = controllers(path)["learned policy"]
+    assert not passive
+    obs, _ = env.reset(seed=0)
+    action = policy(obs)
+    module, meta = load_policy(path)
+    with torch.no_grad():
+        cmd = module(torch.as_tensor(obs * env.observation_layout.scale, dtype=torch.float32))
+    np.testing.assert_allclose(sensing.action_to_command(action), cmd.numpy(), atol=1e-6)
+    assert np.all(np.abs(action) <= 1.0)
+    obs, r, term, trunc, info = env.step(action)
+    assert np.isfinite(r)
