@@ -67,6 +67,14 @@ void bind_envs(py::module_& m) {
       .def_readwrite("max_rock_density", &ScenarioOptions::max_rock_density, "[1/m^2]")
       .def_readwrite("clear_radius", &ScenarioOptions::clear_radius, "[m]")
       .def_readwrite("eval_slope_deg", &ScenarioOptions::eval_slope_deg, "[deg]")
+      .def_readwrite("range_scale", &ScenarioOptions::range_scale,
+                     "multiplies Table 3's maximum bounds (tilt, yaw/lateral/heading offsets, "
+                     "orientations); 0..1")
+      .def_readwrite("step_height_range", &ScenarioOptions::step_height_range, "(min, max) [m]")
+      .def_readwrite("slope_angle_range_deg", &ScenarioOptions::slope_angle_range_deg,
+                     "(min, max) [deg]")
+      .def_readwrite("ripple_amplitude_range", &ScenarioOptions::ripple_amplitude_range,
+                     "(min, max) [m]")
       .def("validate", &ScenarioOptions::validate, "Raise ValueError on an invalid field.");
 
   py::class_<RippleSpec>(m, "RippleSpec", "One ripple of eq 39.")

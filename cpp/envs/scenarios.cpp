@@ -27,11 +27,12 @@ const std::vector<std::pair<ScenarioKind, std::string>>& kinds() {
 // Uniform draws; "max bound" entries of Table 3 are symmetric ranges [-max, max].
 struct Rng {
   std::mt19937_64 gen;
+  double scale = 1.0;  // ScenarioOptions::range_scale, applied to the symmetric maximum bounds
   explicit Rng(std::uint64_t seed) : gen(seed) {}
   double uniform(double lo, double hi) {
     return lo == hi ? lo : std::uniform_real_distribution<double>(lo, hi)(gen);
   }
-  double sym(double max) { return uniform(-max, max); }
+  double sym(double max) { return uniform(-max * scale, max * scale); }
   bool bernoulli(double p) { return std::uniform_real_distribution<double>(0, 1)(gen) < p; }
 };
 
@@ -112,6 +113,13 @@ void ScenarioOptions::validate() const {
   require_in_range(o, "max_rock_density", max_rock_density, 0.0, 5.0);
   require_in_range(o, "clear_radius", clear_radius, 0.0, 10.0);
   require_in_range(o, "eval_slope_deg", eval_slope_deg, 0.0, 45.0);
+  require_in_range(o, "range_scale", range_scale, 0.0, 1.0);
+  require_in_range(o, "step_height_range[0]", step_height_range[0], 0.0, 1.0);
+  require_in_range(o, "step_height_range[1]", step_height_range[1], step_height_range[0], 1.0);
+  require_in_range(o, "slope_angle_range_deg[0]", slope_angle_range_deg[0], 0.0, 40.0);
+  require_in_range(o, "slope_angle_range_deg[1]", slope_angle_range_deg[1], slope_angle_range_deg[0], 40.0);
+  require_in_range(o, "ripple_amplitude_range[0]", ripple_amplitude_range[0], 0.0, 1.0);
+  require_in_range(o, "ripple_amplitude_range[1]", ripple_amplitude_range[1], ripple_amplitude_range[0], 1.0);
 }
 
 double ripple_height(double x, double a, double lambda, double alpha) {
@@ -148,6 +156,7 @@ double slope_height(double u, double start, double angle, double bs, double be, 
 Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
   options.validate();
   Rng rng(seed);
+  rng.scale = options.range_scale;
   const ScenarioKind kind = options.kind;
   const double sp = options.grid_spacing;
   // Table 3 "Ground / Noise amplitude": 0.1 for the rock field, 0.5 elsewhere.
@@ -205,7 +214,8 @@ Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
     const int count = kind == ScenarioKind::Course ? 3 : 4;
     for (int i = 0; i < count; ++i) {
       RippleSpec r;
-      r.amplitude = kind == ScenarioKind::Course ? 0.2 : rng.uniform(0.1, 0.3);
+      r.amplitude = kind == ScenarioKind::Course ? 0.2 : rng.uniform(options.ripple_amplitude_range[0],
+                                                                 options.ripple_amplitude_range[1]);
       r.wavelength = kind == ScenarioKind::Course ? 0.8 : rng.uniform(0.6, 1.0);
       r.alpha = kind == ScenarioKind::Course ? 0.1 : rng.uniform(0.0, 0.2);
       r.start = u;
@@ -214,7 +224,8 @@ Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
     }
   }
   if (kind == ScenarioKind::Slope) {
-    s_angle = rng.uniform(15.0 * kDeg, 30.0 * kDeg);
+    s_angle = rng.uniform(options.slope_angle_range_deg[0] * kDeg,
+                          options.slope_angle_range_deg[1] * kDeg);
     s_bs = rng.uniform(0.1, 0.5);
     s_len = rng.uniform(1.5, 3.0);
     s_be = rng.uniform(0.2, 2.0);
@@ -291,7 +302,8 @@ Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
     case ScenarioKind::Step:
     case ScenarioKind::WheelStep: {
       const bool eval = kind == ScenarioKind::WheelStep;
-      s.step_height = eval ? 0.34 : rng.uniform(0.2, 0.3);  // wheel-high = wheel diameter
+      s.step_height = eval ? 0.34  // wheel-high = wheel diameter
+                           : rng.uniform(options.step_height_range[0], options.step_height_range[1]);
       s.step_distance = eval ? 1.4 : rng.uniform(1.2, 1.6);
       s.step_yaw = eval ? 0.0 : rng.sym(20.0 * kDeg);
       const double sp_pitch = eval ? 0.0 : rng.sym(1.0 * kDeg), sp_roll = eval ? 0.0 : rng.sym(1.0 * kDeg);

@@ -3,6 +3,7 @@
 // initial pose of each trial. Deterministic from a seed.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -30,6 +31,12 @@ struct ScenarioOptions {
   double max_rock_density = 0.5;  ///< [1/m^2] (Table 3)
   double clear_radius = 1.2;      ///< no rock within this distance of the start [m]
   double eval_slope_deg = 20.0;   ///< SlopeEval angle (Table 6)
+  /// Multiplies every Table 3 maximum bound (ground tilt, initial yaw, lateral and heading
+  /// offsets, rock and step orientations): 0 = nominal trials, 1 = the paper's ranges (curricula).
+  double range_scale = 1.0;
+  std::array<double, 2> step_height_range{0.2, 0.3};      ///< [m] (Table 3)
+  std::array<double, 2> slope_angle_range_deg{15.0, 30.0}; ///< [deg] (Table 3)
+  std::array<double, 2> ripple_amplitude_range{0.1, 0.3};  ///< [m] (Table 3)
   void validate() const;
 };
 

@@ -247,3 +247,39 @@ TEST(Scenarios, EvaluationCourses) {
   EXPECT_GT(course.obstacles.size(), 5u);
   EXPECT_DOUBLE_EQ(course.episode_duration, 180.0);
 }
+
+TEST(Scenarios, RandomisationRangesAreOptions) {
+  // range_scale 0: nominal trials (no tilt, yaw, lateral or heading offset); intervals overridden.
+  ScenarioOptions o;
+  o.range_scale = 0.0;
+  for (ScenarioKind k : {ScenarioKind::RockField, ScenarioKind::Slope, ScenarioKind::Ripples}) {
+    o.kind = k;
+    for (std::uint64_t seed = 0; seed < 20; ++seed) {
+      const Scenario s = generate_scenario(o, seed);
+      EXPECT_EQ(s.ground_pitch, 0.0);
+      EXPECT_EQ(s.path.heading, 0.0);
+      EXPECT_EQ(yaw_offset(s), 0.0);
+      EXPECT_EQ(s.path.lateral_deviation(0, 0), 0.0);
+    }
+  }
+  ScenarioOptions h;
+  h.kind = ScenarioKind::Step;
+  h.step_height_range = {0.1, 0.12};
+  h.range_scale = 0.5;
+  for (std::uint64_t seed = 0; seed < 50; ++seed) {
+    const Scenario s = generate_scenario(h, seed);
+    EXPECT_GE(s.step_height, 0.1);
+    EXPECT_LE(s.step_height, 0.12);
+    EXPECT_LE(std::abs(yaw_offset(s)), 22.5 * kDeg + 1e-12);  // half of Table 3's 45 deg
+  }
+  ScenarioOptions sl;
+  sl.kind = ScenarioKind::Slope;
+  sl.slope_angle_range_deg = {10.0, 10.0};
+  EXPECT_NEAR(generate_scenario(sl, 3).slope_angle, 10.0 * kDeg, 1e-15);
+  ScenarioOptions bad;
+  bad.step_height_range = {0.3, 0.2};
+  EXPECT_THROW(generate_scenario(bad, 0), std::invalid_argument);
+  bad = ScenarioOptions{};
+  bad.range_scale = 2.0;
+  EXPECT_THROW(generate_scenario(bad, 0), std::invalid_argument);
+}

@@ -209,3 +209,13 @@ def test_evaluate_runs_an_exported_policy(tmp_path):
     assert np.all(np.abs(action) <= 1.0)
     obs, r, term, trunc, info = env.step(action)
     assert np.isfinite(r)
+
+
+def test_randomisation_ranges_are_kwargs():
+    env = E.ErnestEnv("step", randomisation={"range_scale": 0.0, "step_height_range": (0.15, 0.15)})
+    env.reset(seed=2)
+    sc = env.scenario
+    assert sc.step_height == pytest.approx(0.15) and sc.step_yaw == 0.0
+    assert env.unwrapped.heading_and_lateral() == (pytest.approx(0.0), pytest.approx(0.0))
+    with pytest.raises(ValueError, match="range_scale"):
+        E.ErnestEnv("step", randomisation={"range_scale": 3})

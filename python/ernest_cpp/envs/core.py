@@ -25,8 +25,10 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
                  start_speed: float = 0.0, randomisation: dict | None = None) -> _envs.EnvOptions:
     """EnvOptions from keyword arguments (the Gymnasium kwargs), validated.
 
-    ``randomisation`` sets ScenarioOptions fields (grid_spacing, noise_unit, p_instance,
-    max_rock_density, clear_radius, eval_slope_deg).
+    ``randomisation`` sets ScenarioOptions fields: ``range_scale`` (0..1, multiplies Table 3's
+    maximum bounds: tilt, yaw/lateral/heading offsets, orientations), ``step_height_range``,
+    ``slope_angle_range_deg``, ``ripple_amplitude_range`` ((min, max) pairs), ``max_rock_density``,
+    ``p_instance``, ``noise_unit``, ``grid_spacing``, ``clear_radius``, ``eval_slope_deg``.
     """
     if scenario not in SCENARIO_ALIASES:
         raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(sorted(SCENARIO_ALIASES))}")
@@ -36,7 +38,8 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
     for key, value in (randomisation or {}).items():
         if key == "kind" or not hasattr(sc, key):
             raise ValueError(f"randomisation has no field {key!r}")
-        setattr(sc, key, float(value))
+        setattr(sc, key, tuple(float(v) for v in value) if isinstance(value, (list, tuple))
+                else float(value))
     o.scenario = sc
     o.soil = soil
     o.passive = bool(passive)
