@@ -21,16 +21,7 @@ EpisodeReport run_env_episode(envs::RoverEnv& env, Policy& policy, std::uint64_t
   auto record = [&](const sensing::ActionVector& a, const Eigen::Vector3d& cmd) {
     if (!telemetry) return;
     const dynamics::RoverState& s = env.sim().state();
-    frame.position = s.position;
-    frame.roll = s.roll;
-    frame.pitch = s.pitch;
-    frame.yaw = s.yaw;
-    frame.gimbal_yaw = s.gimbal_yaw;
-    frame.gimbal_roll = s.gimbal_roll;
-    frame.wheel_load = s.wheel_load;
-    frame.power = 0.0;
-    for (double p : s.motor_power) frame.power += p;
-    frame.energy = s.energy;
+    fill_sensor_frame(s, frame);
     TelemetryRow row;
     row.time = s.time;
     row.frame = &frame;

@@ -35,9 +35,7 @@ void SimRoverInterface::init() {
 
 double SimRoverInterface::now() const { return t0_ + static_cast<double>(ticks_) / rate_; }
 
-const SensorFrame& SimRoverInterface::read() {
-  const dynamics::RoverState& s = sim_.state();
-  SensorFrame& f = frame_;
+void fill_sensor_frame(const dynamics::RoverState& s, SensorFrame& f) {
   f.fts_stamp = f.pose_stamp = f.joint_stamp = s.time;
   for (int i = 0; i < 4; ++i) f.fts.row(i) = s.fts[i].transpose();
   f.position = s.position;
@@ -54,7 +52,11 @@ const SensorFrame& SimRoverInterface::read() {
   for (double p : s.motor_power) f.power += p;
   f.energy = s.energy;
   f.roll_torque = s.roll_torque;
-  return f;
+}
+
+const SensorFrame& SimRoverInterface::read() {
+  fill_sensor_frame(sim_.state(), frame_);
+  return frame_;
 }
 
 void SimRoverInterface::command(const ActuatorCommand& c) {

@@ -12,6 +12,10 @@
 
 namespace ernest::runtime {
 
+/// The sensor frame a simulated rover delivers for `state` (every field; stamps = state time).
+/// Shared by SimRoverInterface and the sim-in-the-loop telemetry.
+void fill_sensor_frame(const dynamics::RoverState& state, SensorFrame& frame);
+
 class SimRoverInterface : public RoverInterface {
  public:
   /// Drives `sim` (kept by reference) with elevation samples from `heights`. sensor_rate * sim dt
