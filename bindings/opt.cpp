@@ -23,6 +23,15 @@ namespace {
 
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+// A Python steering(t) -> (theta, theta_rate) as the C++ SteeringFunction of the kinematics.
+SteeringFunction steering_from_python(py::function steering) {
+  return [steering](double t, double& th, double& rate) {
+    py::tuple out = steering(t);
+    th = out[0].cast<double>();
+    rate = out[1].cast<double>();
+  };
+}
+
 // Samples of a (joint, time) -> (q, dq, ddq) function as three (len(times), joints) arrays.
 template <class F>
 py::tuple sample_joints(int joints, const Eigen::VectorXd& times, F&& f) {
@@ -138,24 +147,14 @@ void bind_opt(py::module_& m) {
       .def("integrate",
            [](const AsterixKinematics& k, py::function steering, double t0, double t1,
               const Pose2& start, const IntegrationOptions& options) {
-             SteeringFunction f = [steering](double t, double& th, double& rate) {
-               py::tuple out = steering(t);
-               th = out[0].cast<double>();
-               rate = out[1].cast<double>();
-             };
-             return k.integrate(f, t0, t1, start, options);
+             return k.integrate(steering_from_python(steering), t0, t1, start, options);
            },
            "steering"_a, "t0"_a, "t1"_a, "start"_a = Pose2{}, "options"_a = IntegrationOptions{},
            "Pose at t1 for steering(t) -> (theta, theta_rate); KinematicsError on no progress.")
       .def("integrate_wheels",
            [](const AsterixKinematics& k, py::function steering, double t0, double t1,
               const Pose2& start, const IntegrationOptions& options) {
-             SteeringFunction f = [steering](double t, double& th, double& rate) {
-               py::tuple out = steering(t);
-               th = out[0].cast<double>();
-               rate = out[1].cast<double>();
-             };
-             return k.integrate_wheels(f, t0, t1, start, options);
+             return k.integrate_wheels(steering_from_python(steering), t0, t1, start, options);
            },
            "steering"_a, "t0"_a, "t1"_a, "start"_a = Pose2{}, "options"_a = IntegrationOptions{},
            "Per-wheel states (x_i, y_i, beta_i) of eqs 20–22 at t1.")

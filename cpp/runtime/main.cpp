@@ -27,6 +27,16 @@
 
 namespace {
 
+// One error report for every command: policy errors name their kind; exit code 1.
+int report_error(const std::exception& e) {
+  if (const auto* p = dynamic_cast<const ernest::runtime::PolicyError*>(&e)) {
+    std::fprintf(stderr, "ernest_runtime: policy error (%s): %s\n", ernest::runtime::to_string(p->kind()), e.what());
+  } else {
+    std::fprintf(stderr, "ernest_runtime: %s\n", e.what());
+  }
+  return 1;
+}
+
 void usage(std::FILE* out) {
   std::fprintf(out,
                "usage: ernest_runtime --policy FILE --scenario NAME --seed N --duration S\n"
@@ -110,12 +120,8 @@ int main(int argc, char** argv) {
       std::fclose(out);
       std::printf("replayed %ld observations through %s\n", step, policy_path.c_str());
       return 0;
-    } catch (const runtime::PolicyError& e) {
-      std::fprintf(stderr, "ernest_runtime: policy error (%s): %s\n", runtime::to_string(e.kind()), e.what());
-      return 1;
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "ernest_runtime: %s\n", e.what());
-      return 1;
+      return report_error(e);
     }
   }
   if (policy_path.empty() || scenario.empty() || seed < 0 || duration <= 0.0 ||
@@ -170,11 +176,7 @@ int main(int argc, char** argv) {
                 static_cast<long long>(lat.count));
     if (mode == "onboard") std::printf("watchdog trips           %ld\n", rep.watchdog_trips);
     return rep.diverged ? 3 : 0;
-  } catch (const runtime::PolicyError& e) {
-    std::fprintf(stderr, "ernest_runtime: policy error (%s): %s\n", runtime::to_string(e.kind()), e.what());
-    return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "ernest_runtime: %s\n", e.what());
-    return 1;
+    return report_error(e);
   }
 }
