@@ -1,40 +1,34 @@
-// ERNEST on ODE. Equation numbers refer to seed 004.
+// ERNEST on ODE: model building, placement and the public API; the step is in rover_step.cpp.
+// Equation numbers refer to seed 004.
 #include "ernest/dynamics/rover_sim.hpp"
 
-#include <ode/ode.h>
-
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstring>
-#include <exception>
 #include <mutex>
 #include <random>
-#include <sstream>
 
 #include "ernest/common/validation.hpp"
-#include "ernest/soil/bekker_wong.hpp"
+#include "ernest/dynamics/rover_sim_impl.hpp"
 
 namespace ernest::dynamics {
 
-namespace {
+namespace detail {
 
-using Vec3 = Eigen::Vector3d;
-using Mat3 = Eigen::Matrix3d;
+thread_local std::uint64_t ode_lcp_messages = 0;
 
-constexpr int kChassis = 0, kBogie = 1;
-constexpr int kMaxObstacleContacts = 64;
-constexpr int kMaxContactsPerPair = 4;
 const char* const kBodyNames[6] = {"chassis", "bogie", "wheel FL", "wheel FR", "wheel RL", "wheel RR"};
 
 void init_ode_once() {
   static std::once_flag flag;
   std::call_once(flag, [] {
     dInitODE2(0);
-    // ODE's Dantzig LCP reports recoverable pivoting issues on stderr; the divergence check
-    // below is our error channel, so these messages are dropped.
-    dSetMessageHandler([](int, const char*, va_list) {});
+    // ODE reports LCP trouble through its message handler (on stderr by default). The step
+    // counts it per thread (SolverStats::lcp_errors); the divergence check is our error channel.
+    dSetMessageHandler([](int num, const char*, va_list) {
+      if (num == d_ERR_LCP) ++ode_lcp_messages;
+    });
   });
   // Every thread that steps a world needs ODE's per-thread data (collision caches).
   thread_local bool allocated = false;
@@ -42,15 +36,6 @@ void init_ode_once() {
     dAllocateODEDataForThread(dAllocateMaskAll);
     allocated = true;
   }
-}
-
-Vec3 to_vec(const dReal* v) { return {v[0], v[1], v[2]}; }
-
-Mat3 to_mat(const dReal* r) {  // ODE stores 3x4 row-major
-  Mat3 m;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) m(i, j) = r[4 * i + j];
-  return m;
 }
 
 void to_ode_rot(const Mat3& m, dMatrix3 r) {
@@ -96,12 +81,6 @@ void canonicalise_quaternion(dBodyID b) {
   // No fixed point within 4 ulps (never seen): keep ODE's normalised value.
 }
 
-struct DeepestPoint {
-  Vec3 point;    // reference contact point on the tyre (deepest into the terrain)
-  Vec3 normal;   // terrain normal at it
-  double depth;  // penetration along the normal (> 0 in contact) [m]
-};
-
 // Reference contact point of a torus-shaped tyre (§3.3: DARTS accounts for the torus when locating
 // the point penetrating farthest): centre-circle radius R0 = r - b/2 in the wheel plane, tube
 // radius b/2. For a locally plane terrain of normal n the deepest tyre point is the centre-circle
@@ -127,7 +106,9 @@ DeepestPoint deepest_point(const HeightMap& hm, const Vec3& centre, const Vec3& 
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
 
-}  // namespace
+}  // namespace detail
+
+using namespace detail;
 
 void SimOptions::validate() const {
   const char* o = "SimOptions";
@@ -157,91 +138,27 @@ void Commands::validate() const {
   require_finite(o, "roll_torque", roll_torque);
 }
 
-struct RoverSim::Impl {
-  RoverParameters p;
-  HeightMap hm;
-  std::vector<BoxObstacle> boxes;
-  SimOptions opt;
-  soil::BekkerWongModel soil_free;  // shear regularisation (eqs 28–29) -> 0: pressure terms only
-  soil::BekkerWongModel soil_sat;   // shear saturated (|sign| = 1): pressure + unit shear
-  double mu = 0.5;
+RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
+                     const std::vector<BoxObstacle>& obstacles, const SimOptions& options)
+    : p(params), hm(terrain), boxes(obstacles), opt(options),
+      // sign(v_x) exact in the model: its regularisation is the compaction row's (rover_step.cpp)
+      soil([&] {
+        soil::SoilParameters s = options.soil;
+        s.eps_direction = 0.0;
+        return s;
+      }(), soil::WheelGeometry{params.wheel_radius, params.wheel_width},
+           options.soil_points_per_panel) {}
 
-  dWorldID world = nullptr;
-  dThreadingImplementationID threading = nullptr;
-  dSpaceID rover_space = nullptr, obstacle_space = nullptr;
-  dJointGroupID contacts = nullptr;
-  std::array<dBodyID, 6> body{};
-  std::array<dGeomID, 6> geom{};
-  std::array<dJointID, 4> hinge{};
-  dJointID gimbal = nullptr;
-  std::array<dJointFeedback, 4> hinge_fb{};
-  dJointFeedback gimbal_fb{};
-  std::array<dJointFeedback, 4> ground_fb{};
-  std::array<dJointID, 4> ground_joint{};
-  std::array<dJointID, 4> compaction_joint{};
-  std::array<dJointFeedback, 4> compaction_fb{};
-  std::array<double, 4> compaction{};  // last step's compaction resistance along x [N]
-  std::vector<dGeomID> obstacle_geoms;
-  int n_obstacle_contacts = 0;
-  std::exception_ptr callback_error;
-
-  Commands cmd{};
-  RoverState st{};
-  std::array<double, 4> shear_x{}, shear_y{};
-  // per-step contact data
-  std::array<double, 4> unit_shear_x{}, unit_shear_y{}, explicit_fz{};
-  std::array<Vec3, 4> frame_x{}, frame_y{}, frame_n{};
-  Vec3 pending_force = Vec3::Zero();
-  bool diverged = false;
-  double bogie_com_height_from_gimbal = 0.0;
-
-  static soil::SoilParameters with_eps(soil::SoilParameters s, double eps) {
-    s.eps_contact_x = eps;
-    s.eps_contact_y = eps;
-    s.eps_direction = 0.0;  // sign(v_x) exactly; its regularisation is applied implicitly below
-    return s;
+RoverSim::Impl::~Impl() {
+  if (contacts) dJointGroupDestroy(contacts);
+  if (rover_space) dSpaceDestroy(rover_space);  // destroys its geoms (cleanup on by default)
+  if (obstacle_space) dSpaceDestroy(obstacle_space);
+  if (world) {
+    dWorldSetStepThreadingImplementation(world, nullptr, nullptr);
+    dWorldDestroy(world);
   }
-
-  Impl(const RoverParameters& params, const HeightMap& terrain,
-       const std::vector<BoxObstacle>& obstacles, const SimOptions& options)
-      : p(params), hm(terrain), boxes(obstacles), opt(options),
-        soil_free(with_eps(options.soil, 1e9),
-                  soil::WheelGeometry{params.wheel_radius, params.wheel_width},
-                  options.soil_points_per_panel),
-        soil_sat(with_eps(options.soil, 1e-9),
-                 soil::WheelGeometry{params.wheel_radius, params.wheel_width},
-                 options.soil_points_per_panel) {}
-
-  ~Impl() {
-    if (contacts) dJointGroupDestroy(contacts);
-    if (rover_space) dSpaceDestroy(rover_space);  // destroys its geoms (cleanup on by default)
-    if (obstacle_space) dSpaceDestroy(obstacle_space);
-    if (world) {
-      dWorldSetStepThreadingImplementation(world, nullptr, nullptr);
-      dWorldDestroy(world);
-    }
-    if (threading) dThreadingFreeImplementation(threading);
-  }
-
-  Vec3 axle_world(int i) const { return to_mat(dBodyGetRotation(body[2 + i])).col(1); }
-  Mat3 rot(int b) const { return to_mat(dBodyGetRotation(body[b])); }
-  Vec3 pos(int b) const { return to_vec(dBodyGetPosition(body[b])); }
-  int parent_of(int wheel) const { return wheel < 2 ? kBogie : kChassis; }
-
-  void build();
-  void place(double x, double y, double heading, double psi, double phi, double speed);
-  void gimbal_angles(double& psi, double& phi, double& psid, double& phid, Vec3& ez,
-                     Vec3& ea) const;
-  void apply_actuators(double psi, double phi, double psid, double phid, const Vec3& ez,
-                       const Vec3& ea);
-  void ground_contacts();
-  void obstacle_contacts();
-  void near(dGeomID a, dGeomID b);
-  void read_outputs(double dt_done);
-  void check_divergence();
-  void check_forces_before_step();
-  void step();
-};
+  if (threading) dThreadingFreeImplementation(threading);
+}
 
 void RoverSim::Impl::build() {
   init_ode_once();
@@ -323,6 +240,16 @@ void RoverSim::Impl::build() {
   dJointSetUniversalAxis1(gimbal, 0.0, 0.0, 1.0);
   dJointSetUniversalAxis2(gimbal, 1.0, 0.0, 0.0);
   dJointSetFeedback(gimbal, &gimbal_fb);
+  // The drives are AMotors beside the joints, not the joints' own motors: a hinge or universal
+  // with a bounded motor row is a "mixed" joint whose rows ODE cannot factorise up front, and the
+  // drives' rows are switched between bounded, unbounded and explicit each step (rover_step.cpp).
+  gimbal_motor = dJointCreateAMotor(world, nullptr);
+  dJointAttach(gimbal_motor, body[kChassis], body[kBogie]);
+  dJointSetAMotorMode(gimbal_motor, dAMotorUser);
+  dJointSetAMotorNumAxes(gimbal_motor, 2);
+  dJointSetAMotorAxis(gimbal_motor, 0, 1, 0.0, 0.0, 1.0);  // yaw: chassis z
+  dJointSetAMotorAxis(gimbal_motor, 1, 2, 1.0, 0.0, 0.0);  // roll: bogie x
+  dJointSetFeedback(gimbal_motor, &gimbal_motor_fb);
   for (int i = 0; i < 4; ++i) {
     hinge[i] = dJointCreateHinge(world, nullptr);
     dJointAttach(hinge[i], body[2 + i], body[parent_of(i)]);
@@ -330,6 +257,12 @@ void RoverSim::Impl::build() {
     dJointSetHingeAnchor(hinge[i], c.x(), c.y(), c.z());
     dJointSetHingeAxis(hinge[i], 0.0, 1.0, 0.0);
     dJointSetFeedback(hinge[i], &hinge_fb[i]);
+    wheel_motor[i] = dJointCreateAMotor(world, nullptr);
+    dJointAttach(wheel_motor[i], body[2 + i], body[parent_of(i)]);
+    dJointSetAMotorMode(wheel_motor[i], dAMotorUser);
+    dJointSetAMotorNumAxes(wheel_motor[i], 1);
+    dJointSetAMotorAxis(wheel_motor[i], 0, 1, 0.0, 1.0, 0.0);
+    dJointSetFeedback(wheel_motor[i], &wheel_motor_fb[i]);
   }
 }
 
@@ -384,465 +317,14 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   shear_x.fill(0.0);
   shear_y.fill(0.0);
   compaction.fill(0.0);
+  row_mode.fill(kFree);
+  row_mode_before.fill(kFree);
+  alternating = false;
+  row_force.fill(0.0);
+  explicit_motor_torque.fill(0.0);
   pending_force.setZero();
   diverged = false;
   callback_error = nullptr;
-}
-
-void RoverSim::Impl::gimbal_angles(double& psi, double& phi, double& psid, double& phid, Vec3& ez,
-                                   Vec3& ea) const {
-  // R_c^T R_b = R_z(psi) R_x(phi): yaw about the chassis z, then roll about the bogie x.
-  const Mat3 rc = rot(kChassis), rb = rot(kBogie);
-  const Mat3 rel = rc.transpose() * rb;
-  psi = std::atan2(rel(1, 0), rel(0, 0));
-  phi = std::atan2(rel(2, 1), rel(2, 2));
-  ez = rc.col(2);
-  ea = rb.col(0);
-  const Vec3 wrel = to_vec(dBodyGetAngularVel(body[kBogie])) -
-                    to_vec(dBodyGetAngularVel(body[kChassis]));
-  psid = wrel.dot(ez);  // ez is orthogonal to ea, so the relative rate splits exactly
-  phid = wrel.dot(ea);
-}
-
-void RoverSim::Impl::apply_actuators(double psi, double phi, double psid, double phid,
-                                     const Vec3& ez, const Vec3& ea) {
-  const double dt = opt.dt;
-  // ---- wheels: hinge motors (ODE solves the velocity servo implicitly, |torque| <= limit) ----
-  const double wheel_max = p.wheel_motor.max_output_torque();
-  for (int i = 0; i < 4; ++i) {
-    const dJointID j = hinge[i];
-    if (cmd.wheel_mode == ActuatorMode::Velocity) {
-      dJointSetHingeParam(j, dParamVel, cmd.wheel_speed[i]);
-      dJointSetHingeParam(j, dParamFMax, wheel_max);
-    } else {
-      dJointSetHingeParam(j, dParamVel, 0.0);
-      dJointSetHingeParam(j, dParamFMax, 0.0);
-      if (cmd.wheel_mode == ActuatorMode::Torque) {
-        const double t = std::clamp(cmd.wheel_torque[i], -wheel_max, wheel_max);
-        const Vec3 a = axle_world(i) * t;
-        dBodyAddTorque(body[2 + i], a.x(), a.y(), a.z());
-        dBodyAddTorque(body[parent_of(i)], -a.x(), -a.y(), -a.z());
-      }
-    }
-  }
-  const double gimbal_max = p.gimbal_motor.max_output_torque();
-  const auto add_pair_torque = [&](const Vec3& axis, double t) {
-    const Vec3 v = axis * t;
-    dBodyAddTorque(body[kBogie], v.x(), v.y(), v.z());
-    dBodyAddTorque(body[kChassis], -v.x(), -v.y(), -v.z());
-  };
-  // ---- yaw: motor, or the brake when the AGS is off. ODE's universal motor drives the rate of
-  // body1 (chassis) relative to body2 (bogie), hence the minus sign.
-  if (!cmd.gimbal_enabled) {
-    dJointSetUniversalParam(gimbal, dParamVel, 0.0);
-    dJointSetUniversalParam(gimbal, dParamFMax, p.yaw_brake_torque);
-  } else if (cmd.yaw_mode == ActuatorMode::Velocity) {
-    dJointSetUniversalParam(gimbal, dParamVel, -cmd.yaw_rate);
-    dJointSetUniversalParam(gimbal, dParamFMax, gimbal_max);
-  } else {
-    dJointSetUniversalParam(gimbal, dParamVel, 0.0);
-    dJointSetUniversalParam(gimbal, dParamFMax, 0.0);
-    if (cmd.yaw_mode == ActuatorMode::Torque)
-      add_pair_torque(ez, std::clamp(cmd.yaw_torque, -gimbal_max, gimbal_max));
-  }
-  // ---- roll clutch (§2.2): align the bogie frame with the bogie at bounded speed, then engage.
-  if (!cmd.clutch_engage) {
-    st.clutch = ClutchState::Disengaged;
-  } else if (st.clutch == ClutchState::Disengaged) {
-    st.clutch = ClutchState::Aligning;
-  }
-  if (st.clutch == ClutchState::Aligning) {
-    const double err = phi - st.bogie_frame_angle;
-    const double v = std::clamp(p.clutch_align_gain * err, -p.clutch_align_speed,
-                                p.clutch_align_speed);
-    st.bogie_frame_angle += v * dt;
-    if (std::abs(phi - st.bogie_frame_angle) <= p.clutch_align_tolerance) {
-      st.clutch = ClutchState::Engaged;
-    }
-  } else if (st.clutch == ClutchState::Disengaged && cmd.gimbal_enabled) {
-    // The unloaded frame follows the roll command (it can move with the clutch open).
-    st.bogie_frame_angle = std::clamp(st.bogie_frame_angle + cmd.roll_rate * dt, -p.roll_limit,
-                                      p.roll_limit);
-  }
-  if (st.clutch == ClutchState::Engaged) {
-    st.bogie_frame_angle = phi;
-    if (!cmd.gimbal_enabled) {  // roll actuator braked, pins in: bogie held
-      dJointSetUniversalParam(gimbal, dParamVel2, 0.0);
-      dJointSetUniversalParam(gimbal, dParamFMax2, p.yaw_brake_torque);
-    } else if (cmd.roll_mode == ActuatorMode::Velocity) {
-      dJointSetUniversalParam(gimbal, dParamVel2, -cmd.roll_rate);
-      dJointSetUniversalParam(gimbal, dParamFMax2, gimbal_max);
-    } else {
-      dJointSetUniversalParam(gimbal, dParamVel2, 0.0);
-      dJointSetUniversalParam(gimbal, dParamFMax2, 0.0);
-      if (cmd.roll_mode == ActuatorMode::Torque)
-        add_pair_torque(ea, std::clamp(cmd.roll_torque, -gimbal_max, gimbal_max));
-    }
-  } else {  // pins out: the bogie rolls freely on its bearing
-    dJointSetUniversalParam(gimbal, dParamVel2, 0.0);
-    dJointSetUniversalParam(gimbal, dParamFMax2, 0.0);
-  }
-  // ---- joint stops as stiff spring–dampers (§3.1): ODE's stops with the spring k and damper c
-  // mapped to ERP = h k / (h k + c), CFM = 1 / (h k + c) so that they stay stable at large steps.
-  const double kh = dt * p.stop_stiffness + p.stop_damping;
-  for (int ax = 0; ax < 2; ++ax) {
-    const double lim = ax == 0 ? p.yaw_limit : p.roll_limit;
-    dJointSetUniversalParam(gimbal, ax == 0 ? dParamLoStop : dParamLoStop2, -lim);
-    dJointSetUniversalParam(gimbal, ax == 0 ? dParamHiStop : dParamHiStop2, lim);
-    dJointSetUniversalParam(gimbal, ax == 0 ? dParamStopERP : dParamStopERP2,
-                            dt * p.stop_stiffness / kh);
-    dJointSetUniversalParam(gimbal, ax == 0 ? dParamStopCFM : dParamStopCFM2, 1.0 / kh);
-  }
-  (void)psi;
-  (void)psid;
-  (void)phid;
-}
-
-void RoverSim::Impl::ground_contacts() {
-  const bool soil = opt.ground == GroundType::Soil;
-  for (int i = 0; i < 4; ++i) {
-    ground_joint[i] = nullptr;
-    compaction_joint[i] = nullptr;
-    unit_shear_x[i] = unit_shear_y[i] = explicit_fz[i] = 0.0;
-    st.sinkage[i] = 0.0;
-    st.slip[i] = 0.0;
-    st.contact_vx[i] = st.contact_vy[i] = 0.0;
-    const dBodyID wb = body[2 + i];
-    const Vec3 c = pos(2 + i), a = axle_world(i);
-    const DeepestPoint dp = deepest_point(hm, c, a, p.wheel_radius, p.tyre_tube_radius());
-    // Contact frame of Fig. 7: x forward (yawed with the wheel, not tilted), y along the axle
-    // projected on the terrain, z the terrain normal.
-    const Vec3 n = dp.normal;
-    Vec3 fx = a.cross(n);
-    fx = fx.norm() > 1e-9 ? Vec3(fx.normalized()) : Vec3(rot(parent_of(i)).col(0));
-    const Vec3 fy = n.cross(fx);
-    frame_x[i] = fx;
-    frame_y[i] = fy;
-    frame_n[i] = n;
-    if (!(dp.depth > 0.0)) continue;
-    st.sinkage[i] = dp.depth;
-    const Vec3 vc = to_vec(dBodyGetLinearVel(wb));
-    dVector3 vp;
-    dBodyGetPointVel(wb, dp.point.x(), dp.point.y(), dp.point.z(), vp);
-    const Vec3 vpc = to_vec(vp);
-    st.contact_vx[i] = vpc.dot(fx);
-    st.contact_vy[i] = vpc.dot(fy);
-
-    dContact ct;
-    std::memset(&ct, 0, sizeof ct);
-    ct.geom.pos[0] = dp.point.x();
-    ct.geom.pos[1] = dp.point.y();
-    ct.geom.pos[2] = dp.point.z();
-    ct.geom.normal[0] = n.x();
-    ct.geom.normal[1] = n.y();
-    ct.geom.normal[2] = n.z();
-    ct.fdir1[0] = fx.x();
-    ct.fdir1[1] = fx.y();
-    ct.fdir1[2] = fx.z();
-    if (!soil) {
-      // §3.4 spring–damper as ERP/CFM for this step; Coulomb friction mu (pyramid, dContactApprox1).
-      ct.geom.depth = dp.depth;
-      ct.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
-                        dContactSlip2 | dContactFDir1;
-      ct.surface.mu = mu;
-      ct.surface.slip1 = ct.surface.slip2 = opt.rigid_slip;
-      ct.surface.soft_erp = opt.rigid.erp(opt.dt);
-      ct.surface.soft_cfm = opt.rigid.cfm(opt.dt);
-    } else {
-      const double vx = vc.dot(fx);
-      // The models use sign(v_x) exactly (eps_direction = 0); at v_x = 0 the sign is taken as +.
-      soil::ContactState cs{dp.depth, vx != 0.0 ? vx : 1e-12, vc.dot(fy), st.contact_vx[i],
-                            st.contact_vy[i]};
-      // Bekker–Wong (eqs 12–32) is split into terms ODE can integrate implicitly and the rest:
-      // (a) the shear, whose regularisation tau -> sign(-v_c) min(|v_c|/eps_contact, 1) tau
-      //     (eqs 28–29) is a viscous law with a force cap: a friction row at the contact point
-      //     with force-dependent slip (velocity = slip * force) and bounds +-F_sat;
-      // (b) the compaction resistance -sign(v_x) rb int sigma sin (eq 30), whose regularised sign
-      //     clamp(v_x / eps_direction) is the same kind of law on the wheel-centre velocity: a
-      //     linear-motor row with CFM = eps_direction / F and bounds +-F;
-      // (c) explicit forces: normal stress (eq 32), the shear's normal part and the share of the
-      //     axle torque the rows do not produce, with the levels the rows reached last step.
-      // Treated explicitly, (a) and (b) are stiff dampers (~1e4 N s/m) unstable at any useful step.
-      const soil::WheelSoilForce free = soil_free.evaluate(cs);
-      soil::ContactState sat_state = cs;
-      if (std::abs(sat_state.vcx) < 1e-7) sat_state.vcx = -1e-7;
-      if (std::abs(sat_state.vcy) < 1e-7) sat_state.vcy = -1e-7;
-      const soil::WheelSoilForce sat = soil_sat.evaluate(sat_state);
-      const double sgn_x = sat_state.vcx < 0.0 ? 1.0 : -1.0;  // eq 28 sign at saturation
-      const double sgn_y = sat_state.vcy < 0.0 ? 1.0 : -1.0;  // eq 29
-      const double ax = std::max((sat.fx - free.fx) * sgn_x, 0.0);  // eq 30 shear part, unit sign
-      const double bz = (sat.fz - free.fz) * sgn_x;                  // eq 32 shear part
-      const double cax = (sat.axle_torque - free.axle_torque) * sgn_x;
-      const double ay = std::max((sat.fy - free.fy) * sgn_y, 0.0);  // eq 31
-      const double sign_vx = cs.vx > 0.0 ? 1.0 : -1.0;
-      // rb int sigma sin theta (eq 30); below 1 mN the row is dropped (a CFM of eps / F would
-      // overflow ODE's LCP as F -> 0).
-      double comp = std::max(-free.fx * sign_vx, 0.0);
-      if (comp < 1e-3) comp = 0.0;
-      unit_shear_x[i] = ax;
-      unit_shear_y[i] = ay;
-      st.slip[i] = free.slip;
-      const double sx = shear_x[i];
-      const double fz = free.fz + bz * sx;
-      explicit_fz[i] = fz;
-      const Vec3 f = fy * free.fy + n * fz;
-      dBodyAddForceAtPos(wb, f.x(), f.y(), f.z(), dp.point.x(), dp.point.y(), dp.point.z());
-      const double arm = (dp.point - c).cross(fx).dot(a);  // axle torque per unit x force at P
-      const double row_torque = arm * ax * sx;
-      const double soil_torque = -cax * sx;  // the soil applies -axle_torque (bekker_wong.hpp)
-      // The compaction row acts at the wheel centre; its moment about the axle (at the patch) is
-      // added with last step's level.
-      const Vec3 tc = a * (soil_torque - row_torque + arm * compaction[i]);
-      dBodyAddTorque(wb, tc.x(), tc.y(), tc.z());
-      {
-        // Row 0: compaction (b). Row 1: two-sided normal damping of the wheel centre, capped at
-        // the soil's normal force so the net normal force never pulls the wheel down. Without it
-        // the pressure law's jump between rest and motion (eq 16: t_rest switches within
-        // eps_motion = 5e-5 m/s) pumps energy into vertical bouncing at rest.
-        const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
-        dJointID lm = dJointCreateLMotor(world, contacts);
-        dJointAttach(lm, wb, nullptr);
-        dJointSetLMotorNumAxes(lm, 2);
-        dJointSetLMotorAxis(lm, 0, 0, fx.x(), fx.y(), fx.z());
-        dJointSetLMotorAxis(lm, 1, 0, n.x(), n.y(), n.z());
-        dJointSetLMotorParam(lm, dParamVel, 0.0);
-        dJointSetLMotorParam(lm, dParamFMax, comp);
-        dJointSetLMotorParam(lm, dParamCFM, comp > 0.0 ? eps_dir / comp : 1.0);
-        dJointSetLMotorParam(lm, dParamVel2, 0.0);
-        dJointSetLMotorParam(lm, dParamFMax2, std::max(fz, 0.0));
-        dJointSetLMotorParam(lm, dParamCFM2, 1.0 / opt.soil_normal_damping);
-        dJointSetFeedback(lm, &compaction_fb[i]);
-        compaction_joint[i] = lm;
-      }
-      ct.geom.depth = 0.0;  // no position correction: the normal row is a one-sided damper
-      ct.surface.mode = dContactMu2 | dContactFDir1 | dContactSlip1 | dContactSlip2 |
-                        dContactSoftERP | dContactSoftCFM;
-      ct.surface.mu = ax;
-      ct.surface.mu2 = ay;
-      ct.surface.slip1 = opt.soil.eps_contact_x / std::max(ax, 1e-3);
-      ct.surface.slip2 = opt.soil.eps_contact_y / std::max(ay, 1e-3);
-      ct.surface.soft_erp = 0.0;
-      ct.surface.soft_cfm = 1.0 / opt.soil_normal_damping;
-    }
-    dJointID j = dJointCreateContact(world, contacts, &ct);
-    dJointAttach(j, wb, nullptr);
-    dJointSetFeedback(j, &ground_fb[i]);
-    ground_joint[i] = j;
-  }
-}
-
-void RoverSim::Impl::near(dGeomID a, dGeomID b) {
-  dContact cs[kMaxContactsPerPair];
-  std::memset(cs, 0, sizeof cs);
-  const int n = dCollide(a, b, kMaxContactsPerPair, &cs[0].geom, sizeof(dContact));
-  if (n <= 0) return;
-  const double erp = opt.rigid.erp(opt.dt);
-  // The §3.4 stiffness is per wheel–obstacle contact: n simultaneous points share it.
-  const double cfm = opt.rigid.cfm(opt.dt) * n;
-  for (int k = 0; k < n && n_obstacle_contacts < kMaxObstacleContacts; ++k) {
-    cs[k].surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
-                         dContactSlip2;
-    cs[k].surface.slip1 = cs[k].surface.slip2 = opt.rigid_slip;
-    cs[k].surface.mu = mu;
-    cs[k].surface.soft_erp = erp;
-    cs[k].surface.soft_cfm = cfm;
-    dJointID j = dJointCreateContact(world, contacts, &cs[k]);
-    dJointAttach(j, dGeomGetBody(a), dGeomGetBody(b));
-    ++n_obstacle_contacts;
-  }
-}
-
-void RoverSim::Impl::obstacle_contacts() {
-  n_obstacle_contacts = 0;
-  if (obstacle_geoms.empty()) return;
-  // Never let an exception cross ODE's C callback: capture it and rethrow after the collision.
-  dSpaceCollide2(
-      reinterpret_cast<dGeomID>(rover_space), reinterpret_cast<dGeomID>(obstacle_space), this,
-      [](void* data, dGeomID a, dGeomID b) {
-        auto* self = static_cast<Impl*>(data);
-        if (self->callback_error) return;
-        try {
-          self->near(a, b);
-        } catch (...) {
-          self->callback_error = std::current_exception();
-        }
-      });
-  if (callback_error) {
-    std::exception_ptr e = callback_error;
-    callback_error = nullptr;
-    dJointGroupEmpty(contacts);
-    std::rethrow_exception(e);
-  }
-}
-
-void RoverSim::Impl::step() {
-  if (diverged)
-    throw SimulationDiverged("RoverSim: the simulation diverged earlier; restore() or reset() first");
-  init_ode_once();
-  double psi, phi, psid, phid;
-  Vec3 ez, ea;
-  gimbal_angles(psi, phi, psid, phid, ez, ea);
-  apply_actuators(psi, phi, psid, phid, ez, ea);
-  ground_contacts();
-  obstacle_contacts();
-  if (pending_force.squaredNorm() > 0.0) {
-    dBodyAddForce(body[kChassis], pending_force.x(), pending_force.y(), pending_force.z());
-    pending_force.setZero();
-  }
-  // ODE aborts the process (an assertion in its quaternion normalisation) when a step produces a
-  // non-finite state, so absurd inputs are refused before the step: the divergence check after
-  // it only has to catch finite but absurd states.
-  check_forces_before_step();
-  // dWorldStep (Dantzig LCP), not dWorldQuickStep: QuickStep reorders constraints with ODE's
-  // process-wide random generator (runs are not reproducible) and at equal accuracy (~50
-  // iterations) it is no faster for this 6-body rover (benchmarks/RESULTS.md).
-  dWorldStep(world, opt.dt);
-  read_outputs(opt.dt);
-  dJointGroupEmpty(contacts);
-  check_divergence();
-}
-
-void RoverSim::Impl::read_outputs(double dt) {
-  for (auto b : body) canonicalise_quaternion(b);
-  st.time += dt;
-  const Mat3 rc = rot(kChassis);
-  const Vec3 origin = pos(kChassis) - rc * p.chassis_com;
-  st.position = origin;
-  const dReal* q = dBodyGetQuaternion(body[kChassis]);
-  st.quaternion = Eigen::Vector4d(q[0], q[1], q[2], q[3]);
-  const Vec3 w = to_vec(dBodyGetAngularVel(body[kChassis]));
-  dVector3 vo;
-  dBodyGetPointVel(body[kChassis], origin.x(), origin.y(), origin.z(), vo);
-  st.linear_velocity = to_vec(vo);
-  st.angular_velocity = w;
-  st.body_linear_velocity = rc.transpose() * st.linear_velocity;
-  st.body_angular_velocity = rc.transpose() * w;
-  st.yaw = std::atan2(rc(1, 0), rc(0, 0));
-  st.pitch = std::asin(std::clamp(-rc(2, 0), -1.0, 1.0));
-  st.roll = std::atan2(rc(2, 1), rc(2, 2));
-
-  double psi, phi, psid, phid;
-  Vec3 ez, ea;
-  gimbal_angles(psi, phi, psid, phid, ez, ea);
-  st.gimbal_yaw = psi;
-  st.gimbal_roll = phi;
-  st.gimbal_yaw_rate = psid;
-  st.gimbal_roll_rate = phid;
-  // Gimbal actuator torques on the bogie: the universal joint's feedback moved to the joint
-  // centre and projected on each axis (the cross-axis constraint torque is orthogonal to both).
-  const Vec3 gpt = pos(kChassis) + rc * (p.gimbal_point() - p.chassis_com);
-  const Vec3 f2 = to_vec(gimbal_fb.f2), t2 = to_vec(gimbal_fb.t2);
-  const Vec3 tg = t2 + (pos(kBogie) - gpt).cross(f2);
-  const double gimbal_max = p.gimbal_motor.max_output_torque();
-  double tyaw = tg.dot(ez), troll = tg.dot(ea);
-  if (cmd.gimbal_enabled && cmd.yaw_mode == ActuatorMode::Torque)
-    tyaw += std::clamp(cmd.yaw_torque, -gimbal_max, gimbal_max);
-  if (st.clutch == ClutchState::Engaged && cmd.gimbal_enabled &&
-      cmd.roll_mode == ActuatorMode::Torque)
-    troll += std::clamp(cmd.roll_torque, -gimbal_max, gimbal_max);
-  st.yaw_torque = tyaw;
-  st.roll_torque = troll;
-
-  const double wheel_max = p.wheel_motor.max_output_torque();
-  for (int i = 0; i < 4; ++i) {
-    const int par = parent_of(i);
-    const Vec3 a = axle_world(i);
-    const Vec3 c = pos(2 + i);
-    st.wheel_position[i] = c;
-    st.wheel_speed[i] = (to_vec(dBodyGetAngularVel(body[2 + i])) -
-                         to_vec(dBodyGetAngularVel(body[par]))).dot(a);
-    const Vec3 f1 = to_vec(hinge_fb[i].f1), t1 = to_vec(hinge_fb[i].t1);
-    double tau = t1.dot(a);
-    double explicit_tau = 0.0;
-    if (cmd.wheel_mode == ActuatorMode::Torque)
-      explicit_tau = std::clamp(cmd.wheel_torque[i], -wheel_max, wheel_max);
-    tau += explicit_tau;
-    st.wheel_torque[i] = tau;
-    // FTS: wrench of the assembly on its mount = minus what the mount applies to the assembly
-    // (hinge constraint + motor reaction), moved to the sensor point, in the mount's frame.
-    const Mat3 rp = rot(par);
-    const Vec3 force = -f1;
-    const Vec3 torque_c = -(t1 + explicit_tau * a);
-    const Vec3 s = c + rp.col(2) * p.fts_height;
-    const Vec3 torque_s = torque_c + (c - s).cross(force);
-    st.fts[i].head<3>() = rp.transpose() * force;
-    st.fts[i].tail<3>() = rp.transpose() * torque_s;
-    // Ground normal load and the implicit shear level for the next step's explicit terms.
-    st.wheel_load[i] = 0.0;
-    if (ground_joint[i]) {
-      const Vec3 fc = to_vec(ground_fb[i].f1);
-      const Vec3 fl = compaction_joint[i] ? to_vec(compaction_fb[i].f1) : Vec3::Zero();
-      st.wheel_load[i] = (fc + fl).dot(frame_n[i]) + explicit_fz[i];
-      if (opt.ground == GroundType::Soil) {
-        compaction[i] =
-            compaction_joint[i] ? to_vec(compaction_fb[i].f1).dot(frame_x[i]) : 0.0;
-        shear_x[i] = unit_shear_x[i] > 1e-9 ? clamp_unit(fc.dot(frame_x[i]) / unit_shear_x[i]) : 0.0;
-        shear_y[i] = unit_shear_y[i] > 1e-9 ? clamp_unit(fc.dot(frame_y[i]) / unit_shear_y[i]) : 0.0;
-      }
-    } else {
-      shear_x[i] = shear_y[i] = compaction[i] = 0.0;
-    }
-  }
-  // Electrical power (eq 40) and energy (positive power only: the drives do not regenerate).
-  for (int i = 0; i < 4; ++i) {
-    const MotorElectrical e = motor_electrical(p.wheel_motor, st.wheel_torque[i], st.wheel_speed[i]);
-    st.motor_current[i] = e.current;
-    st.motor_power[i] = e.power;
-  }
-  MotorElectrical ey{}, er{};
-  if (cmd.gimbal_enabled) {  // AGS off: power-on-to-disengage brakes hold at zero power
-    ey = motor_electrical(p.gimbal_motor, st.yaw_torque, psid);
-    if (st.clutch == ClutchState::Engaged) er = motor_electrical(p.gimbal_motor, st.roll_torque, phid);
-  }
-  st.motor_current[4] = ey.current;
-  st.motor_power[4] = ey.power;
-  st.motor_current[5] = er.current;
-  st.motor_power[5] = er.power;
-  for (double pw : st.motor_power) st.energy += std::max(pw, 0.0) * dt;
-}
-
-void RoverSim::Impl::check_forces_before_step() {
-  constexpr double kMaxForce = 1e8;  // [N] and [N m]; 1e6 x the rover's weight
-  for (int b = 0; b < 6; ++b) {
-    const Vec3 f = to_vec(dBodyGetForce(body[b])), t = to_vec(dBodyGetTorque(body[b]));
-    if (f.allFinite() && t.allFinite() && f.norm() <= kMaxForce && t.norm() <= kMaxForce) continue;
-    diverged = true;
-    for (auto id : body) {
-      dBodySetForce(id, 0, 0, 0);
-      dBodySetTorque(id, 0, 0, 0);
-    }
-    dJointGroupEmpty(contacts);
-    std::ostringstream os;
-    os << "SimulationDiverged at t = " << st.time << " s: applied force " << f.norm()
-       << " N / torque " << t.norm() << " N m on the " << kBodyNames[b] << " is non-finite or above "
-       << kMaxForce << "; restore a snapshot or reset";
-    throw SimulationDiverged(os.str());
-  }
-}
-
-void RoverSim::Impl::check_divergence() {
-  for (int b = 0; b < 6; ++b) {
-    const Vec3 x = pos(b), v = to_vec(dBodyGetLinearVel(body[b])),
-               w = to_vec(dBodyGetAngularVel(body[b]));
-    std::string what;
-    if (!x.allFinite() || !v.allFinite() || !w.allFinite()) {
-      what = "non-finite state";
-    } else if (v.norm() > opt.max_speed) {
-      what = "speed " + std::to_string(v.norm()) + " m/s > max_speed " + std::to_string(opt.max_speed);
-    } else if (w.norm() > opt.max_angular_speed) {
-      what = "angular speed " + std::to_string(w.norm()) + " rad/s > max_angular_speed " +
-             std::to_string(opt.max_angular_speed);
-    } else if (x.norm() > 1e6) {
-      what = "position beyond 1e6 m";
-    }
-    if (!what.empty()) {
-      diverged = true;
-      std::ostringstream os;
-      os << "SimulationDiverged at t = " << st.time << " s: " << kBodyNames[b] << " " << what
-         << " (dt = " << opt.dt << " s); restore a snapshot or reset";
-      throw SimulationDiverged(os.str());
-    }
-  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -963,6 +445,9 @@ Snapshot RoverSim::snapshot() const {
   s.shear_x = impl_->shear_x;
   s.shear_y = impl_->shear_y;
   s.compaction = impl_->compaction;
+  s.row_mode = impl_->row_mode;
+  s.row_mode_before = impl_->row_mode_before;
+  s.alternating = impl_->alternating;
   s.valid = true;
   return s;
 }
@@ -986,6 +471,9 @@ void RoverSim::restore(const Snapshot& s) {
   impl_->shear_x = s.shear_x;
   impl_->shear_y = s.shear_y;
   impl_->compaction = s.compaction;
+  impl_->row_mode = s.row_mode;
+  impl_->row_mode_before = s.row_mode_before;
+  impl_->alternating = s.alternating;
   impl_->pending_force.setZero();
   impl_->diverged = false;
 }
@@ -1021,6 +509,7 @@ double RoverSim::potential_energy() const {
   return e;
 }
 
+const SolverStats& RoverSim::solver_stats() const { return impl_->stats; }
 double RoverSim::friction() const { return impl_->mu; }
 const RoverParameters& RoverSim::parameters() const { return impl_->p; }
 const SimOptions& RoverSim::options() const { return impl_->opt; }

@@ -64,11 +64,6 @@ double jx_sign_change(double tf, double tr, double s) {
   return t;
 }
 
-// Sums over the contact patch that eqs 30–32 and the axle torque are built from.
-struct Integrals {
-  double tau_cos = 0, sig_sin = 0, tau_sin = 0, sig_cos = 0, tau_y = 0, tau = 0;
-};
-
 }  // namespace
 
 void WheelGeometry::validate() const {
@@ -109,7 +104,7 @@ BekkerWongModel::BekkerWongModel(const SoilParameters& soil, const WheelGeometry
   d2_ = phi > 0.0 ? cot_xc + cot_xc * cot_xc * tan_phi_ : cot_xc;  // eq 26: cot^2 Xc / cot phi
 }
 
-WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
+SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const {
   const char* o = "ContactState";
   require_finite(o, "sinkage", st.sinkage);
   require_finite(o, "vx", st.vx);
@@ -119,7 +114,7 @@ WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
 
   const SoilParameters& p = soil_;
   const double r = wheel_.radius, b = wheel_.width;
-  WheelSoilForce out;
+  SoilSplit out;
   const double s = slip_ratio(st.vx, st.vcx, p.eps_slip);  // eq 12
   out.slip = s;
   if (!(st.sinkage > 0.0)) return out;  // above the ground: no force
@@ -138,9 +133,6 @@ WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
   out.theta_m = tm;
   out.theta_r = tr;
 
-  // eqs 28–29: shear opposes the contact velocity, scaled to 0 below eps_contact.
-  const double sx = clamp_unit(-st.vcx / p.eps_contact_x);
-  const double sy = clamp_unit(-st.vcy / p.eps_contact_y);
   // sign(v_x) of eqs 30 and 32, regularised (eps_direction, ours; 0 = the paper's sign).
   const double sdir = p.eps_direction > 0.0 ? clamp_unit(st.vx / p.eps_direction)
                                             : (st.vx > 0.0) - (st.vx < 0.0);
@@ -185,17 +177,16 @@ WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
   const Arr base = (cos_eff - cos_tf).max(1e-300);
   const Arr sigma = k_eq_ * (n * base.log()).exp() * (cos_eff > cos_tf).cast<double>();
   const Arr strength = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
-  // eqs 19 and 21 with |j_x| (the sign comes from eq 28).
+  // eqs 19 and 21 with |j_x|, for a unit shear level (eq 28 scales it by clamp(-v_cx / eps)).
   const Arr jx = r * (tf - theta - one_minus_s * (sin_tf - sn));
-  const Arr tau_x = sx * strength * (1.0 - (-jx.abs() / p.shear_modulus_x).exp());
+  const Arr tau_x = strength * (1.0 - (-jx.abs() / p.shear_modulus_x).exp());
   const Arr w_tau = w * tau_x, w_sig = w * sigma;
-  Integrals I;
-  I.tau_cos = (w_tau * c).sum();
-  I.sig_sin = (w_sig * sn).sum();
-  I.tau_sin = (w_tau * sn).sum();
-  I.sig_cos = (w_sig * c).sum();
-  I.tau = w_tau.sum();
-  if (sy != 0.0) {
+  out.fx_pressure = -sdir * r * b * (w_sig * sn).sum();  // eq 30, compaction resistance
+  out.fz_pressure = r * b * (w_sig * c).sum();           // eq 32, normal stress
+  out.fx_shear = r * b * (w_tau * c).sum();              // eq 30, shear
+  out.fz_shear = sdir * r * b * (w_tau * sn).sum();      // eq 32, shear
+  out.torque_shear = r * r * b * w_tau.sum();
+  if (lateral) {
     // eqs 20 and 22, plus Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the
     // reference point (theta = 0) to 0 at theta_r and theta_f.
     const Arr jy = r * one_minus_s * (tf - theta) * tan_beta;
@@ -205,15 +196,32 @@ WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
     const Arr rb = d1_ * (p.cohesion * h_theta + d2_ * weight_density * h_theta.square() / 2.0);
     const Arr fs = rb * (r - h_theta * c);
     const Arr tau_y = strength * (1.0 - (-jy.abs() / p.shear_modulus_y).exp()) + fs / (r * b);
-    I.tau_y = sy * (w * tau_y).sum();
+    out.fy_shear = r * b * (w * tau_y).sum();  // eq 31
   }
-  out.fx = r * b * (I.tau_cos - sdir * I.sig_sin);  // eq 30
-  out.fy = r * b * I.tau_y;                         // eq 31
+  return out;
+}
+
+SoilSplit BekkerWongModel::split(const ContactState& state) const { return integrate(state, true); }
+
+WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
+  const SoilParameters& p = soil_;
+  // eqs 28–29: shear opposes the contact velocity, scaled to 0 below eps_contact.
+  const double sx = clamp_unit(-st.vcx / p.eps_contact_x);
+  const double sy = clamp_unit(-st.vcy / p.eps_contact_y);
+  const SoilSplit t = integrate(st, sy != 0.0);
+  WheelSoilForce out;
+  out.slip = t.slip;
+  out.theta_f = t.theta_f;
+  out.theta_m = t.theta_m;
+  out.theta_r = t.theta_r;
+  out.sinkage = t.sinkage;
+  out.fx = t.fx_pressure + sx * t.fx_shear;  // eq 30
+  out.fy = sy * t.fy_shear;                  // eq 31
   // eq 32, floored at 0: for a braking wheel at a few mm of sinkage in soft soil (n = 1.9) the
   // cohesive shear of eq 19 can outweigh the near-zero normal stress and make the sum slightly
   // negative (~ -0.03 N); the soil cannot pull a wheel into the ground.
-  out.fz = std::max(0.0, r * b * (sdir * I.tau_sin + I.sig_cos));
-  out.axle_torque = r * r * b * I.tau;
+  out.fz = std::max(0.0, t.fz_pressure + sx * t.fz_shear);
+  out.axle_torque = sx * t.torque_shear;
   return out;
 }
 

@@ -38,6 +38,20 @@ struct WheelSoilForce {
   double sinkage = 0.0;   ///< sinkage used (clamped to [0, r]) [m]
 };
 
+/// The model as linear in the shear levels of eqs 28–29: with s_x = clamp(-v_cx / eps_contact_x)
+/// and s_y = clamp(-v_cy / eps_contact_y), evaluate() gives fx = fx_pressure + s_x fx_shear,
+/// fy = s_y fy_shear, fz = max(0, fz_pressure + s_x fz_shear), axle_torque = s_x torque_shear.
+/// The simulator integrates the shear implicitly at a level it solves for, so it needs the parts.
+struct SoilSplit {
+  double fx_pressure = 0.0;   ///< -sign(v_x) r b \int sigma sin (eq 30: compaction resistance) [N]
+  double fz_pressure = 0.0;   ///< r b \int sigma cos (eq 32 without shear, not floored) [N]
+  double fx_shear = 0.0;      ///< r b \int tau_x cos at unit shear level (eq 30) [N]
+  double fz_shear = 0.0;      ///< sign(v_x) r b \int tau_x sin at unit level (eq 32) [N]
+  double torque_shear = 0.0;  ///< r^2 b \int tau_x at unit level (axle torque) [N m]
+  double fy_shear = 0.0;      ///< r b \int tau_y at unit level, bulldozing included (eq 31) [N]
+  double slip = 0.0, theta_f = 0.0, theta_m = 0.0, theta_r = 0.0, sinkage = 0.0;  ///< as WheelSoilForce
+};
+
 /// Immutable, thread-safe evaluator: parameters are validated and derived constants and the
 /// Gauss–Legendre rule are computed once, so evaluate() never allocates.
 class BekkerWongModel {
@@ -54,6 +68,9 @@ class BekkerWongModel {
   /// radius is clamped to r (theta_f = 90 deg): the model has no meaning past the axle.
   WheelSoilForce evaluate(const ContactState& state) const;
 
+  /// The parts of evaluate() in one pass over the contact patch (see SoilSplit).
+  SoilSplit split(const ContactState& state) const;
+
   /// Batch evaluation for the simulator's hot loop. `states` rows are
   /// (sinkage, vx, vy, vcx, vcy); `forces` rows receive (fx, fy, fz, axle_torque).
   void evaluate_batch(const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 5, Eigen::RowMajor>>& states,
@@ -64,6 +81,8 @@ class BekkerWongModel {
   int points_per_panel() const { return static_cast<int>(nodes_.size()); }
 
  private:
+  SoilSplit integrate(const ContactState& state, bool lateral) const;
+
   SoilParameters soil_;
   WheelGeometry wheel_;
   std::vector<double> nodes_, weights_;  // Gauss–Legendre rule on [-1, 1]

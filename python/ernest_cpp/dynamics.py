@@ -33,6 +33,7 @@ from ._core.dynamics import (  # noqa: F401  (re-exports)
     SimOptions,
     SimulationDiverged,
     Snapshot,
+    SolverStats,
     WheelSyncResult,
     motor_electrical,
     synchronise_wheels,
@@ -50,9 +51,10 @@ COMMAND_NAMES = ("w_FL", "w_FR", "w_RL", "w_RR", "yaw_rate", "roll_rate", "gimba
 
 def make_options(ground: str = "soil", soil: str | _soil.SoilParameters = "m90",
                  dt: float | None = None, seed: int = 0,
-                 friction: float | None = None) -> SimOptions:
+                 friction: float | None = None, guess_active_set: bool = True) -> SimOptions:
     """SimOptions for ``ground`` ('soil' or 'rigid'), a soil preset name or SoilParameters, the
-    physics step (default: the study's), the seed and the Coulomb friction (None: drawn)."""
+    physics step (default: the study's), the seed, the Coulomb friction (None: drawn) and
+    whether the solver guesses its active set (False: ODE pivots every step; same solution)."""
     o = SimOptions()
     if ground not in ("soil", "rigid"):
         raise ValueError(f"ground must be 'soil' or 'rigid', got {ground!r}")
@@ -63,6 +65,7 @@ def make_options(ground: str = "soil", soil: str | _soil.SoilParameters = "m90",
     o.seed = int(seed)
     if friction is not None:
         o.friction = float(friction)
+    o.guess_active_set = bool(guess_active_set)
     o.validate()
     return o
 
@@ -117,7 +120,7 @@ __all__ = [
     "COMMAND_NAMES", "COMMAND_SIZE", "OBSERVATION_NAMES", "OBSERVATION_SIZE", "WHEELS",
     "ActuatorMode", "BatchStepper", "BoxObstacle", "ClutchState", "Commands", "GroundType",
     "HeightMap", "MotorElectrical", "MotorParameters", "RoverParameters", "RoverSim", "RoverState",
-    "SimOptions", "SimulationDiverged", "Snapshot", "WheelSyncResult", "command_array",
+    "SimOptions", "SimulationDiverged", "Snapshot", "SolverStats", "WheelSyncResult", "command_array",
     "make_options", "make_sim", "motor_electrical", "rock_field", "sync_commands",
     "synchronise_wheels", "wheel_jacobian",
 ]

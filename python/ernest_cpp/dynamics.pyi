@@ -117,10 +117,18 @@ class SimOptions:
     rigid: RigidContactParameters
     friction: float
     rigid_slip: float
+    guess_active_set: bool
     max_speed: float
     max_angular_speed: float
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
+
+class SolverStats:
+    steps: int
+    first_guess: int
+    later_guess: int
+    pivoted: int
+    lcp_errors: int
 
 class Commands:
     wheel_speed: list[float]
@@ -193,6 +201,8 @@ class RoverSim:
     def apply_chassis_force(self, force: npt.ArrayLike) -> None: ...
     def kinetic_energy(self) -> float: ...
     def potential_energy(self) -> float: ...
+    @property
+    def solver_stats(self) -> SolverStats: ...
     @property
     def friction(self) -> float: ...
     @property

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 
 #include "ernest/dynamics/batch_stepper.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
@@ -512,4 +513,123 @@ TEST(Divergence, NonFiniteOrHugeForceIsRefusedBeforeOdeSeesIt) {
   sim->restore(s);
   EXPECT_NO_THROW(sim->step_n(5));
   EXPECT_THROW(sim->apply_chassis_force(Eigen::Vector3d(NAN, 0.0, 0.0)), std::invalid_argument);
+}
+
+// The active-set guesses (SimOptions::guess_active_set) change how the LCP is solved, not its
+// solution: from the same state, one guessed step and one step pivoted by ODE's Dantzig solver
+// agree to rounding. Checked at every step of runs that toggle the clutch, slip on soil, stop,
+// and saturate the drives, so that every kind of guess occurs. (Not with rigid contacts: ODE
+// bounds their friction by the normal force found before it, an order-dependent approximation,
+// so two orderings of the same LCP legitimately differ there.)
+namespace {
+double state_gap(const Snapshot& a, const Snapshot& b) {
+  double gap = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    for (int d = 0; d < 3; ++d) {
+      gap = std::max(gap, std::abs(a.bodies[k].pos[d] - b.bodies[k].pos[d]) / 1e-6);
+      gap = std::max(gap, std::abs(a.bodies[k].lin[d] - b.bodies[k].lin[d]) / 1e-5);
+      gap = std::max(gap, std::abs(a.bodies[k].ang[d] - b.bodies[k].ang[d]) / 1e-4);
+    }
+  }
+  return gap;  // <= 1: within 1 um, 10 um/s, 0.1 mrad/s
+}
+
+// min_first: fraction of steps whose first guess must hold (the point of guessing).
+void expect_guesses_match_pivoting(SimOptions o, const HeightMap& hm, double heading, int steps,
+                                   double min_first, const std::function<Commands(int)>& command) {
+  const std::vector<BoxObstacle> boxes;
+  o.guess_active_set = true;
+  RoverSim guessed(RoverParameters{}, hm, boxes, o);
+  o.guess_active_set = false;
+  RoverSim pivoted(RoverParameters{}, hm, boxes, o);
+  guessed.reset(0.0, 0.0, heading, 0.0, 0.0, 0.1);
+  std::array<int, 3> seen{};  // free, at upper bound, at lower bound (next-step guesses)
+  for (int k = 0; k < steps; ++k) {
+    guessed.set_commands(command(k));
+    pivoted.restore(guessed.snapshot());
+    guessed.step();
+    const std::uint64_t errors = pivoted.solver_stats().lcp_errors;
+    pivoted.step();
+    // ODE's Dantzig solver sometimes gives up ("LCP internal error"): no reference then.
+    if (pivoted.solver_stats().lcp_errors != errors) continue;
+    const double gap = state_gap(guessed.snapshot(), pivoted.snapshot());
+    ASSERT_LE(gap, 1.0) << "step " << k;
+    ASSERT_NEAR(guessed.state().wheel_load[0], pivoted.state().wheel_load[0], 1e-3) << k;
+    ASSERT_NEAR(guessed.state().wheel_torque[0], pivoted.state().wheel_torque[0], 1e-3) << k;
+    for (auto m : guessed.snapshot().row_mode) seen[std::min<int>(m, 2)] += 1;
+  }
+  const SolverStats& s = guessed.solver_stats();
+  EXPECT_EQ(s.steps, static_cast<std::uint64_t>(steps));
+  EXPECT_GE(s.first_guess, min_first * steps);
+  EXPECT_EQ(pivoted.solver_stats().first_guess, 0u);
+  EXPECT_LE(pivoted.solver_stats().lcp_errors, 0.02 * steps);  // the comparison ran
+  if (o.ground == GroundType::Soil) {
+    EXPECT_GT(seen[1] + seen[2], 0);  // explicit forces at a bound were exercised
+  }
+}
+}  // namespace
+
+TEST(ActiveSet, GuessedStepsMatchThePivotingSolverOnSoil) {
+  SimOptions o;
+  expect_guesses_match_pivoting(o, HeightMap::flat(10, 10, 0.25), 0.0, 400, 0.75, [](int k) {
+    Commands c;
+    // Fast wheels spin (shear at its cap, drive near its limit), then a stop (shear inside).
+    for (auto& w : c.wheel_speed) w = k < 200 ? 3.0 + std::sin(0.05 * k) : 0.0;
+    c.yaw_rate = 0.2 * std::sin(0.03 * k);
+    c.roll_rate = 0.1 * std::cos(0.04 * k);
+    c.clutch_engage = (k / 60) % 2 == 1;
+    return c;
+  });
+}
+
+TEST(ActiveSet, GuessedStepsMatchThePivotingSolverOnASoilSlope) {
+  // 20 deg slope in x, climbed at 0.2 m/s: the rear drives saturate at their current limit.
+  // At 0.34 m/s the wheels dig in and the stuck rover chatters (v_x changes sign from step to
+  // step), the hardest case for guessing: the answers must still agree.
+  Eigen::MatrixXd h(61, 41);  // rows along x from -2 m, 0.1 m apart
+  for (int r = 0; r < h.rows(); ++r) h.row(r).setConstant(std::tan(20 * kDeg) * (-2.0 + 0.1 * r));
+  const HeightMap hm(h, 0.1, -2.0, -2.0);
+  for (const double speed : {0.2, 0.34}) {
+    SCOPED_TRACE(speed);
+    expect_guesses_match_pivoting(SimOptions{}, hm, 0.0, 240, speed < 0.3 ? 0.9 : 0.0,
+                                  [&](int) {
+                                    Commands c;
+                                    for (auto& w : c.wheel_speed) w = speed / 0.17;
+                                    return c;
+                                  });
+  }
+}
+
+TEST(ActiveSet, GuessedDrivesObeyTheirLawOnRigidGround) {
+  // On rigid ground ODE bounds friction by mu times the normal force found before the friction
+  // rows (an order-dependent approximation of Coulomb's law), so a guessed and a pivoted step can
+  // legitimately differ when the drives saturate. What must hold either way is each drive's law:
+  // |torque| <= its limit, and the commanded speed reached whenever the torque is below it.
+  SimOptions o = rigid_options();
+  const double limit = RoverParameters{}.wheel_motor.max_output_torque();
+  RoverSim sim(RoverParameters{}, HeightMap::flat(20, 20, 0.25, 0.0, -2.5, -2.5), {}, o);
+  sim.reset(0.0, 0.0, 0.3, 0.0, 0.0, 0.1);
+  int saturated = 0, servoed = 0;
+  for (int k = 0; k < 200; ++k) {
+    Commands c;
+    for (int i = 0; i < 4; ++i) c.wheel_speed[i] = (k % 50 < 25 ? 4.0 : 0.5) + 0.1 * i;
+    c.yaw_rate = 0.3;
+    sim.set_commands(c);
+    sim.step();
+    for (int i = 0; i < 4; ++i) {
+      const double tau = sim.state().wheel_torque[i];
+      ASSERT_LE(std::abs(tau), limit * (1.0 + 1e-12)) << k;
+      if (std::abs(tau) < limit * (1.0 - 1e-9)) {
+        // (the servo holds the rate about the axle of the step's start; the reported speed
+        // uses the axle at its end, turned by up to ~0.01 rad: ~1e-4 rad/s apart)
+        ASSERT_NEAR(sim.state().wheel_speed[i], c.wheel_speed[i], 1e-3) << "step " << k;
+        ++servoed;
+      } else {
+        ++saturated;
+      }
+    }
+  }
+  EXPECT_GT(saturated, 10);  // both branches of the law were exercised
+  EXPECT_GT(servoed, 100);
+  EXPECT_GT(sim.solver_stats().first_guess, 0.7 * 200);  // speed steps every 25 steps
 }

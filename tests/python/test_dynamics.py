@@ -163,3 +163,21 @@ def test_slope_demo_metrics_follow_table6_definitions(tmp_path):
     assert np.abs(p["psi"]).max() < 0.01  # AGS off: yaw held by the brake (< 0.6 deg)
     with pytest.raises(ValueError, match="controller"):
         slope_demo.run("rl")
+
+
+def test_active_set_guessing_is_exposed_and_agrees_with_pivoting():
+    # Same start, same commands: the guessed and the pivoted solver agree over a short soil run
+    # (the C++ tests compare them step by step over longer, harsher runs).
+    sims = [D.make_sim("soil", guess_active_set=g) for g in (True, False)]
+    for sim in sims:
+        sim.reset(0.0, 0.0, 0.0, speed=0.15)
+        sim.set_commands(D.sync_commands(sim, 0.15, yaw_rate=0.1))
+        sim.step_n(40)
+    a, b = (sim.state for sim in sims)
+    np.testing.assert_allclose(a.position, b.position, atol=1e-6)
+    np.testing.assert_allclose(a.wheel_load, b.wheel_load, rtol=1e-4)
+    guessed, pivoted = (sim.solver_stats for sim in sims)
+    assert guessed.steps == pivoted.steps == 40
+    assert guessed.first_guess >= 36 and pivoted.first_guess == 0
+    assert pivoted.pivoted == 0  # counted only when guessing was tried
+    assert "first_guess" in repr(guessed)

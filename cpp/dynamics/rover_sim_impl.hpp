@@ -1,0 +1,158 @@
+// Internal to cpp/dynamics: the ODE model behind RoverSim. rover_sim.cpp builds and places it,
+// rover_step.cpp advances it. Not part of the embedding API (no stability promise).
+#pragma once
+
+#include <ode/ode.h>
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <exception>
+#include <vector>
+
+#include "ernest/dynamics/rover_sim.hpp"
+#include "ernest/soil/bekker_wong.hpp"
+
+namespace ernest::dynamics {
+
+namespace detail {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+constexpr int kChassis = 0, kBogie = 1;
+constexpr int kMaxObstacleContacts = 64;
+constexpr int kMaxContactsPerPair = 4;
+extern const char* const kBodyNames[6];
+
+inline Vec3 to_vec(const dReal* v) { return {v[0], v[1], v[2]}; }
+inline Mat3 to_mat(const dReal* r) {  // ODE stores 3x4 row-major
+  Mat3 m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m(i, j) = r[4 * i + j];
+  return m;
+}
+
+void init_ode_once();
+/// Messages about the LCP that ODE sent on this thread (its message handler counts them).
+extern thread_local std::uint64_t ode_lcp_messages;
+void canonicalise_quaternion(dBodyID b);
+
+struct DeepestPoint {
+  Vec3 point;    // reference contact point on the tyre (deepest into the terrain)
+  Vec3 normal;   // terrain normal at it
+  double depth;  // penetration along the normal (> 0 in contact) [m]
+};
+DeepestPoint deepest_point(const HeightMap& hm, const Vec3& centre, const Vec3& axle, double r,
+                           double tube);
+
+// Bounded constraint rows whose active set is guessed from the previous step (rover_step.cpp).
+// Per wheel i, row 4 i + k with k: shear x, shear y, compaction, wheel motor; then the gimbal's
+// yaw and roll motors.
+enum RowKind : int { kShearX = 0, kShearY = 1, kCompaction = 2, kWheelMotor = 3 };
+constexpr int kYawMotor = 16, kRollMotor = 17;
+static_assert(kGuessedRowCount == 18, "Snapshot::row_mode covers every guessed row");
+/// Guess for a bounded row: inside its bounds (solved as an unbounded row, hence factorised with
+/// the joints instead of pivoted), or at its upper / lower bound (applied as an explicit force).
+constexpr std::int8_t kFree = 0, kAtHi = 1, kAtLo = 2;
+
+// Per-wheel ground contact of the current step (configuration at the start of the step).
+struct GroundContact {
+  bool active = false;
+  Vec3 point = Vec3::Zero(), arm = Vec3::Zero();  // arm = point - wheel centre
+  Vec3 n = Vec3::UnitZ(), fx = Vec3::UnitX(), fy = Vec3::UnitY(), axle = Vec3::UnitY();
+  double depth = 0.0;
+  // soft soil: bounds of the implicit rows and the explicit normal force (eqs 28–32)
+  double ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0;
+};
+
+// One bounded velocity row of a motor: drive the relative rate to `target` with |torque| <= bound
+// (bound 0: no row).
+struct MotorRow {
+  double target = 0.0, bound = 0.0;
+};
+
+}  // namespace detail
+
+struct RoverSim::Impl {
+  using Vec3 = detail::Vec3;
+  using Mat3 = detail::Mat3;
+
+  RoverParameters p;
+  HeightMap hm;
+  std::vector<BoxObstacle> boxes;
+  SimOptions opt;
+  soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
+  double mu = 0.5;
+
+  dWorldID world = nullptr;
+  dThreadingImplementationID threading = nullptr;
+  dSpaceID rover_space = nullptr, obstacle_space = nullptr;
+  dJointGroupID contacts = nullptr;
+  std::array<dBodyID, 6> body{};
+  std::array<dGeomID, 6> geom{};
+  std::array<dJointID, 4> hinge{};
+  std::array<dJointFeedback, 4> hinge_fb{};
+  std::array<dJointID, 4> wheel_motor{};  // one-axis AMotors (outside the hinges: see build())
+  std::array<dJointFeedback, 4> wheel_motor_fb{};
+  dJointID gimbal = nullptr;        // universal joint with the stops
+  dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
+  dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
+  std::array<dJointFeedback, 4> ground_fb{};
+  std::vector<dGeomID> obstacle_geoms;
+  std::exception_ptr callback_error;
+
+  Commands cmd{};
+  RoverState st{};
+  // Implicit levels reached last step, used by this step's explicit terms; and the row guesses.
+  std::array<double, 4> shear_x{}, shear_y{}, compaction{};
+  std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
+  bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
+  Vec3 pending_force = Vec3::Zero();
+  bool diverged = false;
+
+  // ---- per-step working data (preallocated; the hot loop never allocates) ----
+  std::array<detail::GroundContact, 4> ground{};
+  std::array<detail::MotorRow, 6> motor{};  // wheels FL..RR, yaw, roll
+  Vec3 yaw_axis = Vec3::UnitZ(), roll_axis = Vec3::UnitX();
+  std::array<Vec3, 6> base_force{}, base_torque{};  // explicit forces of this step
+  std::array<dContact, detail::kMaxObstacleContacts> obstacle_contact{};
+  std::array<dBodyID, 2 * detail::kMaxObstacleContacts> obstacle_bodies{};
+  int n_obstacle_contacts = 0;
+  std::array<Snapshot::Body, 6> saved{};        // bodies at the start of the step (retries)
+  std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
+  std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
+  int attempts_last_step = 0;                   // 1 = first guess right; kMaxGuesses + 1 = exact
+  SolverStats stats{};
+
+  Impl(const RoverParameters& params, const HeightMap& terrain,
+       const std::vector<BoxObstacle>& obstacles, const SimOptions& options);
+  ~Impl();
+
+  Vec3 axle_world(int i) const { return to_vec3(dBodyGetRotation(body[2 + i]), 1); }
+  Mat3 rot(int b) const { return detail::to_mat(dBodyGetRotation(body[b])); }
+  Vec3 pos(int b) const { return detail::to_vec(dBodyGetPosition(body[b])); }
+  int parent_of(int wheel) const { return wheel < 2 ? detail::kBogie : detail::kChassis; }
+  static Vec3 to_vec3(const dReal* r, int col) { return {r[col], r[4 + col], r[8 + col]}; }
+
+  // rover_sim.cpp
+  void build();
+  void place(double x, double y, double heading, double psi, double phi, double speed);
+  // rover_step.cpp
+  void step();
+  void gimbal_angles(double& psi, double& phi, double& psid, double& phid, Vec3& ez,
+                     Vec3& ea) const;
+  void prepare_actuators(double phi);
+  void prepare_ground();
+  void prepare_obstacles();
+  void near(dGeomID a, dGeomID b);
+  void emit(const std::int8_t* modes);
+  bool settle(const std::int8_t* modes, std::int8_t* next);
+  void save_bodies();
+  void restore_bodies();
+  void read_outputs(double dt_done);
+  void check_divergence();
+  void check_forces_before_step();
+};
+
+}  // namespace ernest::dynamics
