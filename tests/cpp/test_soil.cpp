@@ -126,6 +126,35 @@ TEST(BekkerWong, AgreesWithIndependentAdaptiveQuadrature) {
   EXPECT_GT(driving, 100);
 }
 
+TEST(BekkerWong, SplitPartsMatchTheReferenceAtZeroAndFullShear) {
+  // split() returns the model as pressure part + shear level x unit-shear part (the simulator
+  // solves the level). The independent reference with eps_contact -> infinity gives the pressure
+  // part alone (level 0), with eps_contact -> 0 and v_c < 0 pressure + unit shear (level +1).
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> h(5e-3, 0.12), vx(0.02, 0.3), vc(-0.3, -0.01);
+  for (const char* soil : kSoils) {
+    const SoilParameters p = SoilParameters::preset(soil);
+    SoilParameters none = p, full = p;
+    none.eps_contact_x = none.eps_contact_y = 1e12;
+    full.eps_contact_x = full.eps_contact_y = 1e-12;
+    const BekkerWongModel m(p, kWheel, 24);
+    for (int i = 0; i < 40; ++i) {
+      const ContactState st{h(rng), vx(rng), vc(rng), vc(rng), vc(rng)};
+      const SoilSplit t = m.split(st);
+      const auto ref0 = reference::evaluate(none, kWheel, st);
+      const auto ref1 = reference::evaluate(full, kWheel, st);
+      const double scale = 2e-4 * (std::max(std::abs(ref1[0]), std::abs(ref1[2])) + 1.0);
+      EXPECT_NEAR(t.fx_pressure, ref0[0], scale) << soil << " case " << i;
+      EXPECT_NEAR(t.fz_pressure, ref0[2], scale) << soil << " case " << i;
+      EXPECT_NEAR(t.fx_pressure + t.fx_shear, ref1[0], scale) << soil << " case " << i;
+      EXPECT_NEAR(t.fy_shear, ref1[1], scale) << soil << " case " << i;
+      EXPECT_NEAR(std::max(0.0, t.fz_pressure + t.fz_shear), ref1[2], scale) << soil << " " << i;
+      EXPECT_NEAR(t.torque_shear, ref1[3], scale * kWheel.radius) << soil << " case " << i;
+      EXPECT_DOUBLE_EQ(t.slip, m.evaluate(st).slip);
+    }
+  }
+}
+
 TEST(BekkerWong, DefaultQuadratureMatchesConvergenceStudy) {
   // The default points_per_panel was chosen by the convergence study in benchmarks/RESULTS.md:
   // relative to the largest force component, 99% of random states are within 0.5% of the
