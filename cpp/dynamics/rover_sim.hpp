@@ -116,8 +116,9 @@ struct RoverState {
 };
 
 /// Bounded constraint rows whose active set RoverSim guesses (see SimOptions::guess_active_set):
-/// per wheel shear x, shear y, compaction and the drive; then the gimbal's yaw and roll drives.
-inline constexpr int kGuessedRowCount = 18;
+/// per wheel shear x, shear y, compaction, the drive and the soil's normal force; then the
+/// gimbal's yaw and roll drives.
+inline constexpr int kGuessedRowCount = 22;
 
 /// How the constraint solver's active-set guesses fared (benchmarks, tests).
 struct SolverStats {

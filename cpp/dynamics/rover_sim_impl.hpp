@@ -47,11 +47,12 @@ DeepestPoint deepest_point(const HeightMap& hm, const Vec3& centre, const Vec3& 
                            double tube);
 
 // Bounded constraint rows whose active set is guessed from the previous step (rover_step.cpp).
-// Per wheel i, row 4 i + k with k: shear x, shear y, compaction, wheel motor; then the gimbal's
-// yaw and roll motors.
-enum RowKind : int { kShearX = 0, kShearY = 1, kCompaction = 2, kWheelMotor = 3 };
-constexpr int kYawMotor = 16, kRollMotor = 17;
-static_assert(kGuessedRowCount == 18, "Snapshot::row_mode covers every guessed row");
+// Per wheel i, row 5 i + k with k: shear x, shear y, compaction, drive, soil normal force (>= 0);
+// then the gimbal's yaw and roll drives.
+enum RowKind : int { kShearX = 0, kShearY = 1, kCompaction = 2, kWheelMotor = 3, kNormal = 4 };
+constexpr int kRowsPerWheel = 5;
+constexpr int kYawMotor = 4 * kRowsPerWheel, kRollMotor = kYawMotor + 1;
+static_assert(kGuessedRowCount == kRollMotor + 1, "Snapshot::row_mode covers every guessed row");
 /// Guess for a bounded row: inside its bounds (solved as an unbounded row, hence factorised with
 /// the joints instead of pivoted), or at its upper / lower bound (applied as an explicit force).
 constexpr std::int8_t kFree = 0, kAtHi = 1, kAtLo = 2;

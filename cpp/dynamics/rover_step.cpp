@@ -29,6 +29,7 @@ constexpr double kWorldCfm = 1e-9;  // build(): dWorldSetCFM; the drives' rows u
 // Below 1 mN a soil row is dropped: a CFM of eps / F would overflow the LCP as F -> 0.
 constexpr double kMinRowBound = 1e-3;
 constexpr std::int8_t kBounded = 3;  // emit the row with its bounds and let ODE pivot
+constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
 
@@ -254,7 +255,7 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
   // ---- drives
   for (int k = 0; k < 6; ++k) {
     const MotorRow& m = motor[k];
-    const int row = k < 4 ? 4 * k + kWheelMotor : kYawMotor + (k - 4);
+    const int row = k < 4 ? kRowsPerWheel * k + kWheelMotor : kYawMotor + (k - 4);
     const std::int8_t mode = m.bound > 0.0 ? mode_of(row) : kBounded;
     double fmax = m.bound;
     if (mode == kFree) fmax = dInfinity;
@@ -280,13 +281,13 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
     const GroundContact& g = ground[i];
     if (!g.active) continue;
     const dBodyID wb = body[2 + i];
-    dContact ct;
-    std::memset(&ct, 0, sizeof ct);
-    for (int k = 0; k < 3; ++k) {
-      ct.geom.pos[k] = g.point[k];
-      ct.geom.normal[k] = g.n[k];
-    }
     if (!soft) {
+      dContact ct;
+      std::memset(&ct, 0, sizeof ct);
+      for (int k = 0; k < 3; ++k) {
+        ct.geom.pos[k] = g.point[k];
+        ct.geom.normal[k] = g.n[k];
+      }
       // §3.4 spring–damper as ERP/CFM for this step; Coulomb friction mu (pyramid). Not guessed:
       // ODE bounds these rows by mu times the normal force found before them (findex), an
       // order-dependent approximation of Coulomb's law that a guess could not reproduce.
@@ -298,58 +299,94 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
       ct.surface.slip1 = ct.surface.slip2 = opt.rigid_slip;
       ct.surface.soft_erp = opt.rigid.erp(opt.dt);
       ct.surface.soft_cfm = opt.rigid.cfm(opt.dt);
-    } else {
-      // Normal row (c): lambda = (motionN - v_n) / cfm = F_z - c v_n >= 0; no position correction.
-      ct.geom.depth = 0.0;
-      ct.surface.mode = dContactMu2 | dContactFDir1 | dContactSlip1 | dContactSlip2 |
-                        dContactSoftERP | dContactSoftCFM | dContactMotionN;
-      ct.surface.soft_erp = 0.0;
-      ct.surface.soft_cfm = 1.0 / opt.soil_normal_damping;
-      ct.surface.motionN = g.fz / opt.soil_normal_damping;
-      // Shear rows (a): those guessed at a bound become explicit forces at the patch; the others
-      // fill the contact's friction slots in order (ODE's first slot takes fdir1).
-      int slot = 0;
-      for (int k = 0; k < 2; ++k) {
-        const double bound = k == 0 ? g.ax : g.ay;
-        if (bound < kMinRowBound) continue;
-        const Vec3& dir = k == 0 ? g.fx : g.fy;
-        const std::int8_t mode = mode_of(4 * i + (k == 0 ? kShearX : kShearY));
-        if (mode == kAtHi || mode == kAtLo) {
-          add_at(f[2 + i], t[2 + i], dir * (mode == kAtHi ? bound : -bound), g.arm);
-          continue;
-        }
-        const double mu_k = mode == kFree ? dInfinity : bound;
-        const double slip = (k == 0 ? opt.soil.eps_contact_x : opt.soil.eps_contact_y) / bound;
-        if (slot == 0) {
-          for (int d = 0; d < 3; ++d) ct.fdir1[d] = dir[d];
-          ct.surface.mu = mu_k;
-          ct.surface.slip1 = slip;
-        } else {  // fdir2 = n x fdir1 = fy
-          ct.surface.mu2 = mu_k;
-          ct.surface.slip2 = slip;
-        }
-        ++slot;
+      dJointID j = dJointCreateContact(world, contacts, &ct);
+      dJointAttach(j, wb, nullptr);
+      dJointSetFeedback(j, &ground_fb[i]);
+      continue;
+    }
+    // Soft soil. Rows at the patch are ODE contact rows, and a contact joint has a normal row
+    // (bounded, >= 0) and up to two friction rows, along fdir1 and normal x fdir1. Contact N has
+    // the terrain normal n and the shear rows; its normal row carries the normal force when that
+    // is solved bounded. When the normal force is guessed positive it is an unbounded row
+    // instead: the friction row (fdir1 = n) of a second contact L whose "normal" is x, with the
+    // y shear as L's second row (x × n = -y); N's and L's normal rows are then kept slack.
+    // (c) Normal force F_n = max(0, F_z - c v_n): a damper around the soil's pressure force that
+    //     never pulls; lambda = (motion - v_n) / cfm with motion = F_z / c, cfm = 1 / c. Guessed
+    //     at 0 (the wheel leaves the soil faster than F_z / c): no row, no force.
+    const double c = opt.soil_normal_damping;
+    const std::int8_t normal_mode = mode_of(kRowsPerWheel * i + kNormal);
+    struct Slot {
+      Vec3 dir;
+      double mu, slip, motion;
+    };
+    Slot slots_n[2], slots_l[2];
+    int nn = 0, nl = 0;
+    if (normal_mode == kFree) slots_l[nl++] = Slot{g.n, dInfinity, 1.0 / c, g.fz / c};
+    // (a) Shear rows: at a guessed bound, explicit forces at the patch.
+    for (int k = 0; k < 2; ++k) {
+      const double bound = k == 0 ? g.ax : g.ay;
+      if (bound < kMinRowBound) continue;
+      const Vec3& dir = k == 0 ? g.fx : g.fy;
+      const std::int8_t mode = mode_of(kRowsPerWheel * i + (k == 0 ? kShearX : kShearY));
+      if (mode == kAtHi || mode == kAtLo) {
+        add_at(f[2 + i], t[2 + i], dir * (mode == kAtHi ? bound : -bound), g.arm);
+        continue;
       }
-      // Compaction row (b) on the wheel centre.
-      if (g.comp > 0.0) {
-        const std::int8_t mode = mode_of(4 * i + kCompaction);
-        if (mode == kAtHi || mode == kAtLo) {
-          f[2 + i] += g.fx * (mode == kAtHi ? g.comp : -g.comp);
-        } else {
-          const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
-          dJointID lm = dJointCreateLMotor(world, contacts);
-          dJointAttach(lm, wb, nullptr);
-          dJointSetLMotorNumAxes(lm, 1);
-          dJointSetLMotorAxis(lm, 0, 0, g.fx.x(), g.fx.y(), g.fx.z());
-          dJointSetLMotorParam(lm, dParamVel, 0.0);
-          dJointSetLMotorParam(lm, dParamFMax, mode == kFree ? dInfinity : g.comp);
-          dJointSetLMotorParam(lm, dParamCFM, eps_dir / g.comp);
-        }
+      const double slip = (k == 0 ? opt.soil.eps_contact_x : opt.soil.eps_contact_y) / bound;
+      const Slot slot{dir, mode == kFree ? dInfinity : bound, slip, 0.0};
+      // y goes with the damper on L when there is one (x × n = -y); else on N (n × x = y).
+      if (k == 1 && normal_mode == kFree) slots_l[nl++] = slot;
+      else slots_n[nn++] = slot;
+    }
+    const auto make = [&](const Vec3& normal, double motion_n, const Slot* slots, int n_slots,
+                          dJointFeedback* fb) {
+      dContact cj;
+      std::memset(&cj, 0, sizeof cj);
+      for (int k = 0; k < 3; ++k) {
+        cj.geom.pos[k] = g.point[k];
+        cj.geom.normal[k] = normal[k];
+      }
+      cj.geom.depth = 0.0;  // no position correction: every row is a velocity law
+      cj.surface.mode = dContactMu2 | dContactFDir1 | dContactSlip1 | dContactSlip2 |
+                        dContactMotion1 | dContactMotion2 | dContactMotionN | dContactSoftERP |
+                        dContactSoftCFM;
+      cj.surface.soft_erp = 0.0;
+      cj.surface.soft_cfm = 1.0 / c;
+      cj.surface.motionN = motion_n;
+      if (n_slots > 0) {
+        for (int k = 0; k < 3; ++k) cj.fdir1[k] = slots[0].dir[k];
+        cj.surface.mu = slots[0].mu;
+        cj.surface.slip1 = slots[0].slip;
+        cj.surface.motion1 = slots[0].motion;
+      }
+      if (n_slots > 1) {  // along normal x fdir1
+        cj.surface.mu2 = slots[1].mu;
+        cj.surface.slip2 = slots[1].slip;
+        cj.surface.motion2 = slots[1].motion;
+      }
+      dJointID j = dJointCreateContact(world, contacts, &cj);
+      dJointAttach(j, wb, nullptr);
+      if (fb) dJointSetFeedback(j, fb);
+    };
+    if (normal_mode == kBounded || nn > 0)
+      make(g.n, normal_mode == kBounded ? g.fz / c : -kSlackSpeed, slots_n, nn, &ground_fb[i]);
+    if (nl > 0) make(g.fx, -kSlackSpeed, slots_l, nl, nullptr);
+    // (b) Compaction row on the wheel centre.
+    if (g.comp > 0.0) {
+      const std::int8_t mode = mode_of(kRowsPerWheel * i + kCompaction);
+      if (mode == kAtHi || mode == kAtLo) {
+        f[2 + i] += g.fx * (mode == kAtHi ? g.comp : -g.comp);
+      } else {
+        const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
+        dJointID lm = dJointCreateLMotor(world, contacts);
+        dJointAttach(lm, wb, nullptr);
+        dJointSetLMotorNumAxes(lm, 1);
+        dJointSetLMotorAxis(lm, 0, 0, g.fx.x(), g.fx.y(), g.fx.z());
+        dJointSetLMotorParam(lm, dParamVel, 0.0);
+        dJointSetLMotorParam(lm, dParamFMax, mode == kFree ? dInfinity : g.comp);
+        dJointSetLMotorParam(lm, dParamCFM, eps_dir / g.comp);
       }
     }
-    dJointID j = dJointCreateContact(world, contacts, &ct);
-    dJointAttach(j, wb, nullptr);
-    dJointSetFeedback(j, &ground_fb[i]);
   }
   // ---- rigid obstacles (always with their bounds: friction limits depend on the normal force)
   for (int k = 0; k < n_obstacle_contacts; ++k) {
@@ -377,7 +414,7 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
   // ---- drives
   for (int k = 0; k < 6; ++k) {
     const MotorRow& m = motor[k];
-    const int row = k < 4 ? 4 * k + kWheelMotor : kYawMotor + (k - 4);
+    const int row = k < 4 ? kRowsPerWheel * k + kWheelMotor : kYawMotor + (k - 4);
     row_force[row] = 0.0;
     if (!(m.bound > 0.0)) continue;
     const Vec3 axis = k < 4 ? ground[k].axle : (k == 4 ? yaw_axis : roll_axis);
@@ -402,10 +439,22 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
   const bool soft = opt.ground == GroundType::Soil;
   for (int i = 0; i < 4; ++i) {
     const GroundContact& g = ground[i];
-    for (int k : {kShearX, kShearY, kCompaction}) row_force[4 * i + k] = 0.0;
+    for (int k : {kShearX, kShearY, kCompaction, kNormal}) row_force[kRowsPerWheel * i + k] = 0.0;
     if (!g.active || !soft) continue;
     const Vec3 v = to_vec(dBodyGetLinearVel(body[2 + i]));
     const Vec3 vp = v + to_vec(dBodyGetAngularVel(body[2 + i])).cross(g.arm);
+    {  // normal force >= 0, F_z - c v_n at the patch: the row's law, or ODE's bounded row
+      const int row = kRowsPerWheel * i + kNormal;
+      const std::int8_t mode = mode_of(row);
+      if (mode == kBounded) {
+        row_force[row] = to_vec(ground_fb[i].f1).dot(g.n);
+        outcome(row, row_force[row] > 0.0 ? kFree : kAtLo);
+      } else {
+        const double total = g.fz - opt.soil_normal_damping * vp.dot(g.n);
+        row_force[row] = mode == kFree ? total : 0.0;
+        outcome(row, total > 0.0 ? kFree : kAtLo);
+      }
+    }
     const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
     struct SoftRow {
       int kind;
@@ -417,7 +466,7 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
         {kCompaction, g.comp, -v.dot(g.fx) * g.comp / eps_dir}};
     for (const SoftRow& r : rows) {
       if (!(r.bound > 0.0)) continue;
-      const int row = 4 * i + r.kind;
+      const int row = kRowsPerWheel * i + r.kind;
       const std::int8_t mode = mode_of(row);
       row_force[row] = mode == kAtHi ? r.bound
                        : mode == kAtLo ? -r.bound
@@ -566,7 +615,7 @@ void RoverSim::Impl::read_outputs(double dt) {
     st.wheel_speed[i] = (to_vec(dBodyGetAngularVel(body[2 + i])) -
                          to_vec(dBodyGetAngularVel(body[par]))).dot(a);
     const Vec3 f1 = to_vec(hinge_fb[i].f1), t1 = to_vec(hinge_fb[i].t1);
-    const double drive = row_force[4 * i + kWheelMotor] + explicit_motor_torque[i];
+    const double drive = row_force[kRowsPerWheel * i + kWheelMotor] + explicit_motor_torque[i];
     st.wheel_torque[i] = drive;  // the hinge's own rows are orthogonal to the axle
     // FTS: wrench of the assembly on its mount = minus what the mount applies to the assembly
     // (hinge constraint + drive reaction), moved to the sensor point, in the mount's frame.
@@ -584,9 +633,10 @@ void RoverSim::Impl::read_outputs(double dt) {
     if (dt > 0.0 && g.active) {
       st.wheel_load[i] = to_vec(ground_fb[i].f1).dot(g.n);
       if (opt.ground == GroundType::Soil) {
-        shear_x[i] = g.ax >= kMinRowBound ? clamp_unit(row_force[4 * i + kShearX] / g.ax) : 0.0;
-        shear_y[i] = g.ay >= kMinRowBound ? clamp_unit(row_force[4 * i + kShearY] / g.ay) : 0.0;
-        compaction[i] = row_force[4 * i + kCompaction];
+        st.wheel_load[i] = row_force[kRowsPerWheel * i + kNormal];
+        shear_x[i] = g.ax >= kMinRowBound ? clamp_unit(row_force[kRowsPerWheel * i + kShearX] / g.ax) : 0.0;
+        shear_y[i] = g.ay >= kMinRowBound ? clamp_unit(row_force[kRowsPerWheel * i + kShearY] / g.ay) : 0.0;
+        compaction[i] = row_force[kRowsPerWheel * i + kCompaction];
       }
     }
   }
