@@ -38,9 +38,10 @@ struct SimOptions {
   soil::SoilParameters soil{};            ///< Bekker–Wong parameters (default M90, Table 2)
   /// Gauss–Legendre points per panel of the soil model.
   int soil_points_per_panel = soil::BekkerWongModel::kDefaultPointsPerPanel;
-  /// One-sided normal damping of the soil [N s/m per wheel] (assumption, ours: Bekker–Wong has no
-  /// rate term, so a wheel would bounce forever on the pressure–sinkage spring; it resists only
-  /// sinking, like plastic soil, and is solved implicitly by ODE).
+  /// Normal damping of the soil [N s/m per wheel] (assumption, ours: Bekker–Wong has no rate
+  /// term, so a wheel would bounce forever on the pressure–sinkage spring, and eq 16's switch
+  /// between rest and motion would pump energy into it). The normal force is
+  /// F_n = max(0, F_z - c v_n): damped both ways, never pulling; solved implicitly by ODE.
   double soil_normal_damping = 1500.0;
   soil::RigidContactParameters rigid{};   ///< §3.4 spring–damper -> ODE ERP/CFM for dt
   /// Coulomb friction of the obstacles and of rigid ground; < 0 draws it once from

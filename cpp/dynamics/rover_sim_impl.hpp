@@ -147,6 +147,12 @@ struct RoverSim::Impl {
   void prepare_ground();
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);
+  struct DriveRow {
+    int row;
+    Vec3 axis;         // world, at the start of the step
+    int body1, body2;  // the row drives (w_1 - w_2) . axis
+  };
+  DriveRow drive_row(int k) const;
   void emit(const std::int8_t* modes);
   bool settle(const std::int8_t* modes, std::int8_t* next);
   void save_bodies();

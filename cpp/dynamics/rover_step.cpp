@@ -8,8 +8,8 @@
 // on soft soil. The bounded rows are therefore guessed from the previous step: a row inside its
 // bounds is emitted unbounded, a row at a bound as the explicit force at that bound, and after
 // the step every guess is checked against its row's law. Checked guesses are the LCP solution (it
-// is unique: J M^-1 J^T + CFM is positive definite); a wrong guess is retried once with the first
-// attempt's outcome, then the step is redone with bounded rows and ODE pivots as before.
+// is unique: J M^-1 J^T + CFM is positive definite); a wrong guess is retried (up to three
+// guesses), then the step is redone with bounded rows and ODE pivots as before.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -248,6 +248,12 @@ void RoverSim::Impl::prepare_obstacles() {
   }
 }
 
+// Drive k (wheels 0..3, yaw, roll): its guessed row, its axis and the bodies it acts between.
+RoverSim::Impl::DriveRow RoverSim::Impl::drive_row(int k) const {
+  if (k < 4) return {kRowsPerWheel * k + kWheelMotor, ground[k].axle, 2 + k, parent_of(k)};
+  return {kYawMotor + (k - 4), k == 4 ? yaw_axis : roll_axis, kChassis, kBogie};
+}
+
 // Joints and forces of one attempt. modes == nullptr: every guessed row with its bounds.
 void RoverSim::Impl::emit(const std::int8_t* modes) {
   std::array<Vec3, 6> f = base_force, t = base_torque;
@@ -255,17 +261,16 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
   // ---- drives
   for (int k = 0; k < 6; ++k) {
     const MotorRow& m = motor[k];
-    const int row = k < 4 ? kRowsPerWheel * k + kWheelMotor : kYawMotor + (k - 4);
+    const DriveRow d = drive_row(k);
+    const int row = d.row;
     const std::int8_t mode = m.bound > 0.0 ? mode_of(row) : kBounded;
     double fmax = m.bound;
     if (mode == kFree) fmax = dInfinity;
     if (mode == kAtHi || mode == kAtLo) {
       fmax = 0.0;
       const double lambda = mode == kAtHi ? m.bound : -m.bound;
-      const Vec3 axis = k < 4 ? ground[k].axle : (k == 4 ? yaw_axis : roll_axis);
-      const int b1 = k < 4 ? 2 + k : kChassis, b2 = k < 4 ? parent_of(k) : kBogie;
-      t[b1] += axis * lambda;
-      t[b2] -= axis * lambda;
+      t[d.body1] += d.axis * lambda;
+      t[d.body2] -= d.axis * lambda;
     }
     if (k < 4) {
       dJointSetAMotorParam(wheel_motor[k], dParamVel, m.target);
@@ -414,15 +419,15 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
   // ---- drives
   for (int k = 0; k < 6; ++k) {
     const MotorRow& m = motor[k];
-    const int row = k < 4 ? kRowsPerWheel * k + kWheelMotor : kYawMotor + (k - 4);
+    const DriveRow d = drive_row(k);
+    const int row = d.row;
     row_force[row] = 0.0;
     if (!(m.bound > 0.0)) continue;
-    const Vec3 axis = k < 4 ? ground[k].axle : (k == 4 ? yaw_axis : roll_axis);
+    const Vec3& axis = d.axis;
     const std::int8_t mode = mode_of(row);
     if (mode == kAtHi || mode == kAtLo) {
-      const int b1 = k < 4 ? 2 + k : kChassis, b2 = k < 4 ? parent_of(k) : kBogie;
-      const double rate = (to_vec(dBodyGetAngularVel(body[b1])) -
-                           to_vec(dBodyGetAngularVel(body[b2]))).dot(axis);
+      const double rate = (to_vec(dBodyGetAngularVel(body[d.body1])) -
+                           to_vec(dBodyGetAngularVel(body[d.body2]))).dot(axis);
       const double demand = (m.target - rate) / kWorldCfm;  // the row's unclamped force
       row_force[row] = mode == kAtHi ? m.bound : -m.bound;
       outcome(row, status_of(demand, m.bound) == mode ? mode : kFree);
