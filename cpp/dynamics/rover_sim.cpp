@@ -171,7 +171,7 @@ void RoverSim::Impl::build() {
                                        threading);
   dWorldSetGravity(world, 0.0, 0.0, -opt.soil.gravity);
   dWorldSetERP(world, 0.2);
-  dWorldSetCFM(world, 1e-9);
+  dWorldSetCFM(world, kWorldCfm);
   dWorldSetAutoDisableFlag(world, 0);
   rover_space = dSimpleSpaceCreate(nullptr);
   obstacle_space = dSimpleSpaceCreate(nullptr);

@@ -23,6 +23,8 @@ using Mat3 = Eigen::Matrix3d;
 constexpr int kChassis = 0, kBogie = 1;
 constexpr int kMaxObstacleContacts = 64;
 constexpr int kMaxContactsPerPair = 4;
+// World CFM (build()); the drives' rows use it, so checking a drive at its bound needs it too.
+constexpr double kWorldCfm = 1e-9;
 extern const char* const kBodyNames[6];
 
 inline Vec3 to_vec(const dReal* v) { return {v[0], v[1], v[2]}; }

@@ -25,7 +25,6 @@ using namespace detail;
 namespace {
 
 constexpr int kMaxGuesses = 3;
-constexpr double kWorldCfm = 1e-9;  // build(): dWorldSetCFM; the drives' rows use it
 // Below 1 mN a soil row is dropped: a CFM of eps / F would overflow the LCP as F -> 0.
 constexpr double kMinRowBound = 1e-3;
 constexpr std::int8_t kBounded = 3;  // emit the row with its bounds and let ODE pivot
