@@ -99,6 +99,14 @@ void bind_dynamics(py::module_& m) {
                   "x0"_a = -5.0, "y0"_a = -5.0, "Plane z = tan(angle) x rising along +x.")
       .def("height", &HeightMap::height, "x"_a, "y"_a, "Bilinear height [m].")
       .def("normal", &HeightMap::normal, "x"_a, "y"_a, "Unit upward normal of the surface.")
+      .def(
+          "height_normal",
+          [](const HeightMap& m, double x, double y) {
+            Eigen::Vector3d n;
+            const double h = m.height_normal(x, y, n);
+            return py::make_tuple(h, n);
+          },
+          "x"_a, "y"_a, "(height [m], unit upward normal) in one query.")
       .def_property_readonly("heights", &HeightMap::heights)
       .def_property_readonly("spacing", &HeightMap::spacing)
       .def_property_readonly("origin_x", &HeightMap::origin_x)
@@ -217,7 +225,7 @@ void bind_dynamics(py::module_& m) {
       .def_readonly("steps", &SolverStats::steps, "physics steps since construction")
       .def_readonly("first_guess", &SolverStats::first_guess, "steps whose first guess held")
       .def_readonly("later_guess", &SolverStats::later_guess, "steps held at a later guess")
-      .def_readonly("pivoted", &SolverStats::pivoted, "steps solved by ODE's pivoting LCP")
+      .def_readonly("pivoted", &SolverStats::pivoted, "steps where ODE pivoted the rows whose guesses kept failing")
       .def_readonly("lcp_errors", &SolverStats::lcp_errors,
                     "steps on which ODE's pivoting LCP reported an internal error")
       .def("__repr__", [](const SolverStats& s) {

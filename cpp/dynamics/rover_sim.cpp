@@ -91,16 +91,19 @@ DeepestPoint deepest_point(const HeightMap& hm, const Vec3& centre, const Vec3& 
   DeepestPoint dp;
   Vec3 n = hm.normal(centre.x(), centre.y());
   Vec3 p = centre;
+  double h = 0.0;
   for (int pass = 0; pass < 2; ++pass) {
     Vec3 d = n - n.dot(axle) * axle;  // in-plane direction of n
     const double dn = d.norm();
-    d = dn > 1e-9 ? Vec3(d / dn) : Vec3::Zero();
+    d = dn > 1e-9 ? Vec3(d * (1.0 / dn)) : Vec3::Zero();
     p = centre - r0 * d - tube * n;
-    n = hm.normal(p.x(), p.y());
+    const Vec3 used = n;
+    h = hm.height_normal(p.x(), p.y(), n);
+    if (n == used) break;  // planar there: another pass would give the same point, bit for bit
   }
   dp.point = p;
   dp.normal = n;
-  dp.depth = (hm.height(p.x(), p.y()) - p.z()) * n.z();
+  dp.depth = (h - p.z()) * n.z();
   return dp;
 }
 

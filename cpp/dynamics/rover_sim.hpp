@@ -125,8 +125,8 @@ inline constexpr int kGuessedRowCount = 22;
 struct SolverStats {
   std::uint64_t steps = 0;         ///< physics steps taken since construction
   std::uint64_t first_guess = 0;   ///< steps whose first guess was right
-  std::uint64_t later_guess = 0;   ///< steps right at the second or third guess
-  std::uint64_t pivoted = 0;       ///< steps solved by ODE's pivoting LCP after three wrong guesses
+  std::uint64_t later_guess = 0;   ///< steps right at the second or third guess (no row pivoted)
+  std::uint64_t pivoted = 0;       ///< steps where ODE pivoted the rows whose guesses kept failing
   /// Steps on which ODE's pivoting solver reported an internal error ("LCP internal error, s <=
   /// 0"): it then stops early with a wrong answer. Guessed steps never pivot the guessed rows.
   std::uint64_t lcp_errors = 0;

@@ -101,7 +101,9 @@ struct RoverSim::Impl {
   dJointID gimbal = nullptr;        // universal joint with the stops
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
   dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
-  std::array<dJointFeedback, 4> ground_fb{};
+  // Ground contact feedback: the contact with the terrain normal (N) and, when the normal force
+  // is a guessed unbounded row, the second contact (L) that carries it (rover_step.cpp, emit()).
+  std::array<dJointFeedback, 4> ground_fb{}, ground_fb_l{};
   std::vector<dGeomID> obstacle_geoms;
   std::exception_ptr callback_error;
 
@@ -155,8 +157,12 @@ struct RoverSim::Impl {
     int body1, body2;  // the row drives (w_1 - w_2) . axis
   };
   DriveRow drive_row(int k) const;
+  enum class RigidEmit { None, Guessed, Bounded };
+  RigidEmit rigid_emit(const std::int8_t* modes, int wheel) const;
   void emit(const std::int8_t* modes);
   bool settle(const std::int8_t* modes, std::int8_t* next);
+  bool settle_rigid(int wheel, const std::int8_t* modes, const Vec3& patch_velocity,
+                    std::int8_t* next);
   void save_bodies();
   void restore_bodies();
   void read_outputs(double dt_done);

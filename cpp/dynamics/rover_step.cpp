@@ -29,6 +29,7 @@ constexpr int kMaxGuesses = 3;
 constexpr double kMinRowBound = 1e-3;
 constexpr std::int8_t kBounded = 3;  // emit the row with its bounds and let ODE pivot
 constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
+constexpr double kStickMargin = 0.8;   // rigid friction above 0.8 mu F_n: solved bounded next step
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
 
@@ -253,6 +254,19 @@ RoverSim::Impl::DriveRow RoverSim::Impl::drive_row(int k) const {
   return {kYawMotor + (k - 4), k == 4 ? yaw_axis : roll_axis, kChassis, kBogie};
 }
 
+// Rigid ground (§3.4) under wheel i: the contact's rows are guessed like the soil's. Normal at 0
+// (separating): no contact at all. Normal pushing and both friction rows inside mu times it
+// (sticking, the rolling wheel's usual case): three unbounded rows. A friction row at its bound
+// (sliding): ODE's own contact with its bounds, because the bound, mu times the normal force, is
+// itself unknown, so no explicit force can stand for it.
+RoverSim::Impl::RigidEmit RoverSim::Impl::rigid_emit(const std::int8_t* modes, int wheel) const {
+  if (!modes) return RigidEmit::Bounded;
+  const std::int8_t* m = modes + kRowsPerWheel * wheel;
+  if (m[kNormal] == kAtLo) return RigidEmit::None;
+  if (m[kNormal] == kFree && m[kShearX] == kFree && m[kShearY] == kFree) return RigidEmit::Guessed;
+  return RigidEmit::Bounded;
+}
+
 // Joints and forces of one attempt. modes == nullptr: every guessed row with its bounds.
 void RoverSim::Impl::emit(const std::int8_t* modes) {
   std::array<Vec3, 6> f = base_force, t = base_torque;
@@ -280,49 +294,92 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
     }
   }
   // ---- ground
+  // Rows at the patch are ODE contact rows, and a contact joint has a normal row (bounded, >= 0)
+  // and up to two friction rows, along fdir1 and normal x fdir1. Contact N has the terrain
+  // normal n and the x (and on soil maybe y) rows; its normal row carries the normal force when
+  // that is solved bounded. When the normal force is guessed positive it is an unbounded row
+  // instead: the friction row (fdir1 = n) of a second contact L whose "normal" is x, with the y
+  // row as L's second row (x × n = -y); N's and L's normal rows are then kept slack.
   const bool soft = opt.ground == GroundType::Soil;
+  struct Slot {
+    Vec3 dir;
+    double mu, slip, motion;
+  };
+  const double rigid_erp = opt.rigid.erp(opt.dt), rigid_cfm = opt.rigid.cfm(opt.dt);
   for (int i = 0; i < 4; ++i) {
     const GroundContact& g = ground[i];
     if (!g.active) continue;
     const dBodyID wb = body[2 + i];
+    const auto make = [&](const Vec3& normal, double motion_n, double cfm_n, const Slot* slots,
+                          int n_slots, dJointFeedback* fb) {
+      dContact cj;
+      std::memset(&cj, 0, sizeof cj);
+      for (int k = 0; k < 3; ++k) {
+        cj.geom.pos[k] = g.point[k];
+        cj.geom.normal[k] = normal[k];
+      }
+      cj.geom.depth = 0.0;  // no position correction: every row is a velocity law
+      cj.surface.mode = dContactMu2 | dContactFDir1 | dContactSlip1 | dContactSlip2 |
+                        dContactMotion1 | dContactMotion2 | dContactMotionN | dContactSoftERP |
+                        dContactSoftCFM;
+      cj.surface.soft_erp = 0.0;
+      cj.surface.soft_cfm = cfm_n;
+      cj.surface.motionN = motion_n;
+      if (n_slots > 0) {
+        for (int k = 0; k < 3; ++k) cj.fdir1[k] = slots[0].dir[k];
+        cj.surface.mu = slots[0].mu;
+        cj.surface.slip1 = slots[0].slip;
+        cj.surface.motion1 = slots[0].motion;
+      }
+      if (n_slots > 1) {  // along normal x fdir1
+        cj.surface.mu2 = slots[1].mu;
+        cj.surface.slip2 = slots[1].slip;
+        cj.surface.motion2 = slots[1].motion;
+      }
+      dJointID j = dJointCreateContact(world, contacts, &cj);
+      dJointAttach(j, wb, nullptr);
+      if (fb) dJointSetFeedback(j, fb);
+    };
     if (!soft) {
+      const RigidEmit how = rigid_emit(modes, i);
+      if (how == RigidEmit::None) continue;
+      if (how == RigidEmit::Guessed) {
+        // The §3.4 spring–damper as ODE's normal row would apply it (lambda = (erp depth / dt
+        // - v_n) / cfm), and sticking friction rows with the contact's slip.
+        const Slot l[2] = {{g.n, dInfinity, rigid_cfm, rigid_erp * g.depth / opt.dt},
+                           {g.fy, dInfinity, opt.rigid_slip, 0.0}};
+        const Slot n[1] = {{g.fx, dInfinity, opt.rigid_slip, 0.0}};
+        make(g.n, -kSlackSpeed, rigid_cfm, n, 1, &ground_fb[i]);
+        make(g.fx, -kSlackSpeed, rigid_cfm, l, 2, &ground_fb_l[i]);
+        continue;
+      }
       dContact ct;
       std::memset(&ct, 0, sizeof ct);
       for (int k = 0; k < 3; ++k) {
         ct.geom.pos[k] = g.point[k];
         ct.geom.normal[k] = g.n[k];
       }
-      // §3.4 spring–damper as ERP/CFM for this step; Coulomb friction mu (pyramid). Not guessed:
-      // ODE bounds these rows by mu times the normal force found before them (findex), an
-      // order-dependent approximation of Coulomb's law that a guess could not reproduce.
+      // Coulomb friction mu (pyramid): ODE bounds these rows by mu times the normal force found
+      // before them (findex), an order-dependent approximation of Coulomb's law.
       for (int k = 0; k < 3; ++k) ct.fdir1[k] = g.fx[k];
       ct.geom.depth = g.depth;
       ct.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
                         dContactSlip2 | dContactFDir1;
       ct.surface.mu = mu;
       ct.surface.slip1 = ct.surface.slip2 = opt.rigid_slip;
-      ct.surface.soft_erp = opt.rigid.erp(opt.dt);
-      ct.surface.soft_cfm = opt.rigid.cfm(opt.dt);
+      ct.surface.soft_erp = rigid_erp;
+      ct.surface.soft_cfm = rigid_cfm;
       dJointID j = dJointCreateContact(world, contacts, &ct);
       dJointAttach(j, wb, nullptr);
       dJointSetFeedback(j, &ground_fb[i]);
       continue;
     }
-    // Soft soil. Rows at the patch are ODE contact rows, and a contact joint has a normal row
-    // (bounded, >= 0) and up to two friction rows, along fdir1 and normal x fdir1. Contact N has
-    // the terrain normal n and the shear rows; its normal row carries the normal force when that
-    // is solved bounded. When the normal force is guessed positive it is an unbounded row
-    // instead: the friction row (fdir1 = n) of a second contact L whose "normal" is x, with the
-    // y shear as L's second row (x × n = -y); N's and L's normal rows are then kept slack.
+    // Soft soil.
     // (c) Normal force F_n = max(0, F_z - c v_n): a damper around the soil's pressure force that
     //     never pulls; lambda = (motion - v_n) / cfm with motion = F_z / c, cfm = 1 / c. Guessed
     //     at 0 (the wheel leaves the soil faster than F_z / c): no row, no force.
     const double c = opt.soil_normal_damping;
     const std::int8_t normal_mode = mode_of(kRowsPerWheel * i + kNormal);
-    struct Slot {
-      Vec3 dir;
-      double mu, slip, motion;
-    };
     Slot slots_n[2], slots_l[2];
     int nn = 0, nl = 0;
     if (normal_mode == kFree) slots_l[nl++] = Slot{g.n, dInfinity, 1.0 / c, g.fz / c};
@@ -342,39 +399,10 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
       if (k == 1 && normal_mode == kFree) slots_l[nl++] = slot;
       else slots_n[nn++] = slot;
     }
-    const auto make = [&](const Vec3& normal, double motion_n, const Slot* slots, int n_slots,
-                          dJointFeedback* fb) {
-      dContact cj;
-      std::memset(&cj, 0, sizeof cj);
-      for (int k = 0; k < 3; ++k) {
-        cj.geom.pos[k] = g.point[k];
-        cj.geom.normal[k] = normal[k];
-      }
-      cj.geom.depth = 0.0;  // no position correction: every row is a velocity law
-      cj.surface.mode = dContactMu2 | dContactFDir1 | dContactSlip1 | dContactSlip2 |
-                        dContactMotion1 | dContactMotion2 | dContactMotionN | dContactSoftERP |
-                        dContactSoftCFM;
-      cj.surface.soft_erp = 0.0;
-      cj.surface.soft_cfm = 1.0 / c;
-      cj.surface.motionN = motion_n;
-      if (n_slots > 0) {
-        for (int k = 0; k < 3; ++k) cj.fdir1[k] = slots[0].dir[k];
-        cj.surface.mu = slots[0].mu;
-        cj.surface.slip1 = slots[0].slip;
-        cj.surface.motion1 = slots[0].motion;
-      }
-      if (n_slots > 1) {  // along normal x fdir1
-        cj.surface.mu2 = slots[1].mu;
-        cj.surface.slip2 = slots[1].slip;
-        cj.surface.motion2 = slots[1].motion;
-      }
-      dJointID j = dJointCreateContact(world, contacts, &cj);
-      dJointAttach(j, wb, nullptr);
-      if (fb) dJointSetFeedback(j, fb);
-    };
     if (normal_mode == kBounded || nn > 0)
-      make(g.n, normal_mode == kBounded ? g.fz / c : -kSlackSpeed, slots_n, nn, &ground_fb[i]);
-    if (nl > 0) make(g.fx, -kSlackSpeed, slots_l, nl, nullptr);
+      make(g.n, normal_mode == kBounded ? g.fz / c : -kSlackSpeed, 1.0 / c, slots_n, nn,
+           &ground_fb[i]);
+    if (nl > 0) make(g.fx, -kSlackSpeed, 1.0 / c, slots_l, nl, nullptr);
     // (b) Compaction row on the wheel centre.
     if (g.comp > 0.0) {
       const std::int8_t mode = mode_of(kRowsPerWheel * i + kCompaction);
@@ -402,6 +430,53 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
     dBodySetTorque(body[b], t[b].x(), t[b].y(), t[b].z());
   }
   check_forces_before_step();
+}
+
+// Rigid ground under wheel i after the step: the contact's forces (from the joints' feedback) and
+// where Coulomb's law puts each row (next[]). Returns false if a guess was wrong: a guessed
+// contact whose normal force is negative or whose friction exceeds mu times it, or a missing one
+// that the spring–damper would push. A contact ODE solved with its bounds is right by
+// construction: only its outcome is recorded.
+bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& vp,
+                                  std::int8_t* next) {
+  const GroundContact& g = ground[i];
+  const int r = kRowsPerWheel * i;
+  const RigidEmit how = rigid_emit(modes, i);
+  if (how == RigidEmit::None) {
+    const double push = opt.rigid.erp(opt.dt) * g.depth / opt.dt - vp.dot(g.n);
+    next[r + kNormal] = push > 0.0 ? kFree : kAtLo;
+    next[r + kShearX] = next[r + kShearY] = kFree;
+    return push <= 0.0;
+  }
+  Vec3 f = to_vec(ground_fb[i].f1);
+  if (how == RigidEmit::Guessed) f += to_vec(ground_fb_l[i].f1);
+  const double fn = f.dot(g.n), fx = f.dot(g.fx), fy = f.dot(g.fy);
+  row_force[r + kNormal] = fn;
+  row_force[r + kShearX] = fx;
+  row_force[r + kShearY] = fy;
+  const double cap = mu * std::max(fn, 0.0);
+  next[r + kNormal] = fn > 0.0 ? kFree : kAtLo;
+  if (how == RigidEmit::Guessed) {
+    // The check is exact: |lambda| <= mu F_n. The outcome for the next step leaves a margin:
+    // friction near its cap is about to slide, and a failed guess costs a second step.
+    const bool ok = std::abs(fx) <= cap && std::abs(fy) <= cap;
+    next[r + kShearX] = status_of(fx, kStickMargin * cap);
+    next[r + kShearY] = status_of(fy, kStickMargin * cap);
+    if (!ok || !(fn > 0.0)) return false;
+    return true;
+  } else {
+    // ODE bounded these rows by mu times the normal force it had when it clamped them, which can
+    // be 30 % off the final one, so the force does not tell sliding from sticking; the slip
+    // velocity does: a row whose law lambda = -v_t / slip exceeds the bound is sliding.
+    const auto law = [&](const Vec3& dir) {
+      const double v = vp.dot(dir);
+      return opt.rigid_slip > 0.0 ? -v / opt.rigid_slip : (v == 0.0 ? 0.0 : -v * dInfinity);
+    };
+    next[r + kShearX] = status_of(law(g.fx), cap);
+    next[r + kShearY] = status_of(law(g.fy), cap);
+  }
+  if (how == RigidEmit::Bounded) return true;
+  return next[r + kNormal] == kFree && next[r + kShearX] == kFree && next[r + kShearY] == kFree;
 }
 
 // After dWorldStep: the force of every guessed row and where its law puts it (next[]); returns
@@ -444,9 +519,13 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
   for (int i = 0; i < 4; ++i) {
     const GroundContact& g = ground[i];
     for (int k : {kShearX, kShearY, kCompaction, kNormal}) row_force[kRowsPerWheel * i + k] = 0.0;
-    if (!g.active || !soft) continue;
+    if (!g.active) continue;
     const Vec3 v = to_vec(dBodyGetLinearVel(body[2 + i]));
     const Vec3 vp = v + to_vec(dBodyGetAngularVel(body[2 + i])).cross(g.arm);
+    if (!soft) {
+      if (!settle_rigid(i, modes, vp, next)) held = false;
+      continue;
+    }
     {  // normal force >= 0, F_z - c v_n at the patch: the row's law, or ODE's bounded row
       const int row = kRowsPerWheel * i + kNormal;
       const std::int8_t mode = mode_of(row);
@@ -528,16 +607,19 @@ void RoverSim::Impl::step() {
   // QuickStep reorders constraints with ODE's process-wide random generator (not reproducible).
   // Guesses in turn: the last step's outcome; the outcome two steps back (a period-2 chatter,
   // e.g. a stuck wheel's v_x changing sign every step, defeats the first; once it held, it goes
-  // first); then the last attempt's outcome.
+  // first); then the last attempt's outcome. After kMaxGuesses wrong guesses every row whose
+  // guess failed is solved with its bounds instead (ODE pivots it, and a bounded row cannot be
+  // wrong), attempt after attempt: each adds at least one bounded row, so this ends.
   const bool chatter = alternating && row_mode_before != row_mode;
   std::array<std::int8_t, kGuessedRowCount> guess = chatter ? row_mode_before : row_mode;
-  std::array<std::int8_t, kGuessedRowCount> next = guess;
+  std::array<std::int8_t, kGuessedRowCount> next = guess, tried = guess;
   int attempts = 0;
   bool held = false;
   alternating = false;
   const std::uint64_t lcp_messages = ode_lcp_messages;
-  while (opt.guess_active_set && !held && attempts < kMaxGuesses) {
+  while (opt.guess_active_set && !held && attempts < kMaxGuesses + kGuessedRowCount) {
     if (attempts++ > 0) restore_bodies();
+    tried = guess;
     emit(guess.data());
     dWorldStep(world, opt.dt);
     held = settle(guess.data(), next.data());
@@ -550,13 +632,19 @@ void RoverSim::Impl::step() {
       guess = chatter ? row_mode : row_mode_before;
       continue;
     }
-    // Where each row's law put it; a row that jumped from one bound to the other (its velocity
-    // changed sign within the step) is most likely between them.
-    for (int r = 0; r < kGuessedRowCount; ++r)
-      guess[r] = (guess[r] == kAtHi && next[r] == kAtLo) || (guess[r] == kAtLo && next[r] == kAtHi)
-                     ? kFree : next[r];
+    for (int r = 0; r < kGuessedRowCount; ++r) {
+      if (attempts >= kMaxGuesses) {
+        guess[r] = tried[r] != kBounded && next[r] != tried[r] ? kBounded : tried[r];
+      } else {
+        // Where each row's law put it; a row that jumped from one bound to the other (its
+        // velocity changed sign within the step) is most likely between them.
+        const bool flipped = (tried[r] == kAtHi && next[r] == kAtLo) ||
+                             (tried[r] == kAtLo && next[r] == kAtHi);
+        guess[r] = flipped ? kFree : next[r];
+      }
+    }
   }
-  if (!held) {
+  if (!held) {  // guessing off (or, never seen, no progress): every row with its bounds
     if (attempts++ > 0) restore_bodies();
     emit(nullptr);
     dWorldStep(world, opt.dt);
@@ -568,8 +656,9 @@ void RoverSim::Impl::step() {
   ++stats.steps;
   if (ode_lcp_messages != lcp_messages) ++stats.lcp_errors;
   if (opt.guess_active_set) {
+    const bool some_bounded = std::find(tried.begin(), tried.end(), kBounded) != tried.end();
     if (held && attempts == 1) ++stats.first_guess;
-    else if (held) ++stats.later_guess;
+    else if (held && !some_bounded) ++stats.later_guess;
     else ++stats.pivoted;
   }
   read_outputs(opt.dt);
@@ -635,9 +724,8 @@ void RoverSim::Impl::read_outputs(double dt) {
     st.wheel_load[i] = 0.0;
     shear_x[i] = shear_y[i] = compaction[i] = 0.0;
     if (dt > 0.0 && g.active) {
-      st.wheel_load[i] = to_vec(ground_fb[i].f1).dot(g.n);
+      st.wheel_load[i] = row_force[kRowsPerWheel * i + kNormal];
       if (opt.ground == GroundType::Soil) {
-        st.wheel_load[i] = row_force[kRowsPerWheel * i + kNormal];
         shear_x[i] = g.ax >= kMinRowBound ? clamp_unit(row_force[kRowsPerWheel * i + kShearX] / g.ax) : 0.0;
         shear_y[i] = g.ay >= kMinRowBound ? clamp_unit(row_force[kRowsPerWheel * i + kShearY] / g.ay) : 0.0;
         compaction[i] = row_force[kRowsPerWheel * i + kCompaction];

@@ -9,7 +9,8 @@
 namespace ernest::dynamics {
 
 HeightMap::HeightMap(Eigen::MatrixXd heights, double spacing, double origin_x, double origin_y)
-    : heights_(std::move(heights)), spacing_(spacing), origin_x_(origin_x), origin_y_(origin_y) {
+    : heights_(std::move(heights)), spacing_(spacing), origin_x_(origin_x), origin_y_(origin_y),
+      inv_spacing_(1.0 / spacing) {
   require_positive("HeightMap", "spacing", spacing);
   require_finite("HeightMap", "origin_x", origin_x);
   require_finite("HeightMap", "origin_y", origin_y);
@@ -40,7 +41,7 @@ HeightMap HeightMap::slope(double angle, double length, double width, double spa
 
 double HeightMap::height_gradient(double x, double y, double& dhdx, double& dhdy) const {
   const Eigen::Index nx = heights_.rows(), ny = heights_.cols();
-  const double u = (x - origin_x_) / spacing_, v = (y - origin_y_) / spacing_;
+  const double u = (x - origin_x_) * inv_spacing_, v = (y - origin_y_) * inv_spacing_;
   // Outside the grid the edge value continues (zero gradient across the border).
   const bool out_x = !(u >= 0.0 && u <= static_cast<double>(nx - 1));
   const bool out_y = !(v >= 0.0 && v <= static_cast<double>(ny - 1));
@@ -53,8 +54,8 @@ double HeightMap::height_gradient(double x, double y, double& dhdx, double& dhdy
   const double h01 = heights_(i, j + 1), h11 = heights_(i + 1, j + 1);
   const double h = (1 - tx) * (1 - ty) * h00 + tx * (1 - ty) * h10 + (1 - tx) * ty * h01 +
                    tx * ty * h11;
-  dhdx = out_x ? 0.0 : ((h10 - h00) * (1 - ty) + (h11 - h01) * ty) / spacing_;
-  dhdy = out_y ? 0.0 : ((h01 - h00) * (1 - tx) + (h11 - h10) * tx) / spacing_;
+  dhdx = out_x ? 0.0 : ((h10 - h00) * (1 - ty) + (h11 - h01) * ty) * inv_spacing_;
+  dhdy = out_y ? 0.0 : ((h01 - h00) * (1 - tx) + (h11 - h10) * tx) * inv_spacing_;
   return h;
 }
 
@@ -63,10 +64,17 @@ double HeightMap::height(double x, double y) const {
   return height_gradient(x, y, gx, gy);
 }
 
-Eigen::Vector3d HeightMap::normal(double x, double y) const {
+double HeightMap::height_normal(double x, double y, Eigen::Vector3d& n) const {
   double gx, gy;
-  height_gradient(x, y, gx, gy);
-  return Eigen::Vector3d(-gx, -gy, 1.0).normalized();
+  const double h = height_gradient(x, y, gx, gy);
+  n = Eigen::Vector3d(-gx, -gy, 1.0) * (1.0 / std::sqrt(1.0 + gx * gx + gy * gy));
+  return h;
+}
+
+Eigen::Vector3d HeightMap::normal(double x, double y) const {
+  Eigen::Vector3d n;
+  height_normal(x, y, n);
+  return n;
 }
 
 void BoxObstacle::validate() const {

@@ -28,6 +28,8 @@ class HeightMap {
   Eigen::Vector3d normal(double x, double y) const;
   /// Height and gradient in one call.
   double height_gradient(double x, double y, double& dhdx, double& dhdy) const;
+  /// Height and unit upward normal in one call.
+  double height_normal(double x, double y, Eigen::Vector3d& n) const;
 
   const Eigen::MatrixXd& heights() const { return heights_; }
   double spacing() const { return spacing_; }
@@ -39,6 +41,7 @@ class HeightMap {
  private:
   Eigen::MatrixXd heights_;
   double spacing_, origin_x_, origin_y_;
+  double inv_spacing_;  // queries multiply: they run 12+ times per wheel per step
 };
 
 /// Rigid box obstacle: centre, full sizes and yaw/pitch/roll (Z-Y-X) orientation [rad].
