@@ -113,6 +113,7 @@ struct RoverSim::Impl {
   std::array<double, 4> shear_x{}, shear_y{}, compaction{};
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
+  std::array<bool, 2> stop_set{};  // the gimbal's yaw / roll stop is set (prepare_actuators)
   Vec3 pending_force = Vec3::Zero();
   bool diverged = false;
 
@@ -147,7 +148,7 @@ struct RoverSim::Impl {
   void step();
   void gimbal_angles(double& psi, double& phi, double& psid, double& phid, Vec3& ez,
                      Vec3& ea) const;
-  void prepare_actuators(double phi);
+  void prepare_actuators(double psi, double phi);
   void prepare_ground();
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);

@@ -63,7 +63,7 @@ void RoverSim::Impl::gimbal_angles(double& psi, double& phi, double& psid, doubl
 // Drive rows (velocity servo up to the current-limited torque, eq 40's motor), the roll clutch
 // and the joint stops. A drive row acts on (w_1 - w_2) . axis with body 1 the wheel (wheels) or
 // the chassis (gimbal), hence the gimbal targets' minus sign.
-void RoverSim::Impl::prepare_actuators(double phi) {
+void RoverSim::Impl::prepare_actuators(double psi, double phi) {
   const double dt = opt.dt;
   const double wheel_max = p.wheel_motor.max_output_torque();
   explicit_motor_torque.fill(0.0);
@@ -127,11 +127,19 @@ void RoverSim::Impl::prepare_actuators(double phi) {
   }
   // ---- joint stops as stiff spring–dampers (§3.1): ODE's stops with the spring k and damper c
   // mapped to ERP = h k / (h k + c), CFM = 1 / (h k + c) so that they stay stable at large steps.
+  // ODE engages a stop when the angle at the start of the step is beyond it, which it checks by
+  // computing both angles every step; so a stop is only set while its angle is within 1e-6 rad
+  // of it (our angles and ODE's agree far closer), which gives the same rows and spares that.
   const double kh = dt * p.stop_stiffness + p.stop_damping;
   for (int ax = 0; ax < 2; ++ax) {
     const double lim = ax == 0 ? p.yaw_limit : p.roll_limit;
-    dJointSetUniversalParam(gimbal, ax == 0 ? dParamLoStop : dParamLoStop2, -lim);
-    dJointSetUniversalParam(gimbal, ax == 0 ? dParamHiStop : dParamHiStop2, lim);
+    const bool near = std::abs(ax == 0 ? psi : phi) >= lim - 1e-6;
+    if (near == stop_set[ax]) continue;
+    stop_set[ax] = near;
+    dJointSetUniversalParam(gimbal, ax == 0 ? dParamLoStop : dParamLoStop2,
+                            near ? -lim : -dInfinity);
+    dJointSetUniversalParam(gimbal, ax == 0 ? dParamHiStop : dParamHiStop2,
+                            near ? lim : dInfinity);
     dJointSetUniversalParam(gimbal, ax == 0 ? dParamStopERP : dParamStopERP2,
                             dt * p.stop_stiffness / kh);
     dJointSetUniversalParam(gimbal, ax == 0 ? dParamStopCFM : dParamStopCFM2, 1.0 / kh);
@@ -594,7 +602,7 @@ void RoverSim::Impl::step() {
   gimbal_angles(psi, phi, psid, phid, yaw_axis, roll_axis);
   base_force.fill(Vec3::Zero());
   base_torque.fill(Vec3::Zero());
-  prepare_actuators(phi);
+  prepare_actuators(psi, phi);
   prepare_ground();
   prepare_obstacles();
   base_force[kChassis] += pending_force;

@@ -505,6 +505,32 @@ TEST(GimbalSuspension, ClutchAlignsTheBogieFrameAtBoundedSpeedBeforeEngaging) {
   EXPECT_NEAR(sim.state().bogie_frame_angle, sim.state().gimbal_roll, p.clutch_align_tolerance);
 }
 
+TEST(GimbalStops, YawDrivenPastItsLimitStopsThereAndComesBack) {
+  // The yaw servo asks for 100 deg at 20 deg/s; the stop (a stiff spring-damper, §3.1) holds
+  // the gimbal at 45 deg up to the spring's give under the drive's torque, and reversing the
+  // command leaves the stop.
+  const RoverParameters p;
+  RoverSim sim(p, HeightMap::flat(10, 10, 0.25), {}, rigid_options());
+  sim.reset(0.0, 0.0, 0.0);
+  Commands c;
+  for (auto& w : c.wheel_speed) w = 0.0;
+  c.yaw_rate = 20 * kDeg;
+  sim.set_commands(c);
+  double top = 0.0;
+  for (int k = 0; k < 200; ++k) {
+    sim.step();
+    top = std::max(top, sim.state().gimbal_yaw);
+  }
+  const double give = p.gimbal_motor.max_output_torque() / p.stop_stiffness;
+  EXPECT_GT(top, p.yaw_limit - 1e-3);
+  EXPECT_LT(top, p.yaw_limit + give + 1e-3);
+  EXPECT_NEAR(sim.state().gimbal_yaw, p.yaw_limit, give + 1e-3);  // held there, not past
+  c.yaw_rate = -20 * kDeg;  // back (slowly: the held front wheels skid as the bogie turns)
+  sim.set_commands(c);
+  sim.step_n(40);
+  EXPECT_LT(sim.state().gimbal_yaw, p.yaw_limit - 0.05);
+}
+
 TEST(Divergence, NonFiniteOrHugeForceIsRefusedBeforeOdeSeesIt) {
   // ODE aborts the process on a non-finite state inside its step; the simulator must raise
   // instead, and leave a state that restore() recovers from.
