@@ -12,7 +12,11 @@ namespace ernest {
 void exp_n(const double* x, double* y, int n);
 /// y[i] = log(x[i]) for 0 <= i < n. x and y may be the same array.
 void log_n(const double* x, double* y, int n);
-/// Which implementation exp_n / log_n use on this machine: "avx2", "sse2" or "scalar".
+/// Which implementation exp_n / log_n use: "avx2", "sse2" or "scalar" (the best this machine
+/// has, chosen once at start-up).
 const char* vector_math_backend();
+/// Switch to another implementation (tests and benchmarks; not thread-safe). Returns false,
+/// changing nothing, if this machine or build does not have it.
+bool set_vector_math_backend(const char* name);
 
 }  // namespace ernest
