@@ -14,37 +14,22 @@ namespace ernest::soil {
 
 namespace {
 
-// Nodes of up to four panels (three kinks) in one fixed-capacity array: no heap allocation.
-using Arr = Eigen::Array<double, Eigen::Dynamic, 1, Eigen::ColMajor,
-                         4 * BekkerWongModel::kMaxPointsPerPanel, 1>;
+// Nodes of up to four panels (three kinks) in fixed-capacity arrays: no heap allocation.
+constexpr int kCapacity = 4 * BekkerWongModel::kMaxPointsPerPanel;
 
 // Every angle of the model lies in [-pi/2, pi/2] (theta_f <= 90 deg since sinkage <= r), where
 // these Taylor polynomials are accurate to < 1e-11; unlike std::cos they vectorise. They take
-// t2 = t^2, so that cos and sin of the same angles share it.
-inline Arr poly_cos_t2(const Arr& t2) {
+// t2 = t^2, so that cos and sin of the same angle share it.
+inline double poly_cos_t2(double t2) {
   return 1.0 + t2 * (-1.0 / 2 + t2 * (1.0 / 24 + t2 * (-1.0 / 720 + t2 * (1.0 / 40320 +
          t2 * (-1.0 / 3628800 + t2 * (1.0 / 479001600 + t2 * (-1.0 / 87178291200.0 +
          t2 * (1.0 / 20922789888000.0))))))));
 }
 
-inline Arr poly_sin_t2(const Arr& t, const Arr& t2) {
+inline double poly_sin_t2(double t, double t2) {
   return t * (1.0 + t2 * (-1.0 / 6 + t2 * (1.0 / 120 + t2 * (-1.0 / 5040 + t2 * (1.0 / 362880 +
          t2 * (-1.0 / 39916800 + t2 * (1.0 / 6227020800.0 + t2 * (-1.0 / 1307674368000.0 +
          t2 * (1.0 / 355687428096000.0)))))))));
-}
-
-// exp / log of every node through glibc's vector maths (common/vector_math.hpp): measured
-// faster than Eigen 3.4's packet exp/log at the SSE2 baseline and than std::exp one by one.
-inline Arr exp_each(const Arr& x) {
-  Arr y(x.size());
-  exp_n(x.data(), y.data(), static_cast<int>(x.size()));
-  return y;
-}
-
-inline Arr log_each(const Arr& x) {
-  Arr y(x.size());
-  log_n(x.data(), y.data(), static_cast<int>(x.size()));
-  return y;
 }
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
@@ -166,7 +151,10 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
     std::sort(cuts, cuts + ncuts);
   }
   const int np = static_cast<int>(nodes_.size());
-  Arr theta(np * (ncuts - 1)), w(np * (ncuts - 1));
+  // Plain loops over the nodes (the compiler vectorises them), the transcendentals of all nodes
+  // in batched calls (common/vector_math.hpp).
+  alignas(32) double theta[kCapacity], w[kCapacity], c[kCapacity], sn[kCapacity];
+  alignas(32) double cos_eff[kCapacity], pw[kCapacity], ex[2 * kCapacity];
   int m = 0;
   for (int panel = 0; panel + 1 < ncuts; ++panel) {
     const double lo = cuts[panel], hi = cuts[panel + 1];
@@ -178,39 +166,57 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
     }
   }
   if (m == 0) return out;
-  theta.conservativeResize(m);
-  w.conservativeResize(m);
 
-  const Arr theta2 = theta.square();
-  const Arr c = poly_cos_t2(theta2), sn = poly_sin_t2(theta, theta2);
   // eq 18: theta' maps [theta_r, theta_m] onto [theta_f, theta_m]; theta' = theta in front.
-  const Arr theta_map = tf - (theta - tr) * ((tf - tm) / (tm - tr));
-  const Arr cos_eff = (theta < tm).select(poly_cos_t2(theta_map.square()), c);
-  // eq 17, with (cos theta' - cos theta_f)^n written as exp(n log(.)).
-  const Arr base = (cos_eff - cos_tf).max(1e-300);
-  const Arr sigma = (cos_eff > cos_tf).select(k_eq_ * exp_each(n * log_each(base)), 0.0);
-  const Arr strength = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
-  // eqs 19 and 21 with |j_x|, for a unit shear level (eq 28 scales it by clamp(-v_cx / eps)).
-  const Arr jx = r * (tf - theta - one_minus_s * (sin_tf - sn));
-  const Arr tau_x = strength * (1.0 - exp_each(-jx.abs() / p.shear_modulus_x));
-  const Arr w_tau = w * tau_x, w_sig = w * sigma;
-  out.fx_pressure = -sdir * r * b * (w_sig * sn).sum();  // eq 30, compaction resistance
-  out.fz_pressure = r * b * (w_sig * c).sum();           // eq 32, normal stress
-  out.fx_shear = r * b * (w_tau * c).sum();              // eq 30, shear
-  out.fz_shear = sdir * r * b * (w_tau * sn).sum();      // eq 32, shear
-  out.torque_shear = r * r * b * w_tau.sum();
-  if (lateral) {
-    // eqs 20 and 22, plus Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the
-    // reference point (theta = 0) to 0 at theta_r and theta_f.
-    const Arr jy = r * one_minus_s * (tf - theta) * tan_beta;
-    const Arr h_theta =
-        (theta < 0.0).select(h * (theta - tr) / std::max(-tr, 1e-300), h * (tf - theta) / tf)
-            .max(0.0);
-    const Arr rb = d1_ * (p.cohesion * h_theta + d2_ * weight_density * h_theta.square() / 2.0);
-    const Arr fs = rb * (r - h_theta * c);
-    const Arr tau_y = strength * (1.0 - exp_each(-jy.abs() / p.shear_modulus_y)) + fs / (r * b);
-    out.fy_shear = r * b * (w * tau_y).sum();  // eq 31
+  const double map_slope = (tf - tm) / (tm - tr);
+  for (int i = 0; i < m; ++i) {
+    const double t = theta[i], t2 = t * t;
+    c[i] = poly_cos_t2(t2);
+    sn[i] = poly_sin_t2(t, t2);
+    const double tmap = tf - (t - tr) * map_slope;
+    cos_eff[i] = t < tm ? poly_cos_t2(tmap * tmap) : c[i];
+    // eq 17, with (cos theta' - cos theta_f)^n written as exp(n log(.)).
+    pw[i] = std::max(cos_eff[i] - cos_tf, 1e-300);
   }
+  log_n(pw, pw, m);
+  for (int i = 0; i < m; ++i) pw[i] *= n;
+  // eqs 19 and 21 with |j_x| (unit shear level: eq 28 scales it by clamp(-v_cx / eps)), and
+  // eqs 20 and 22 for y: the exponents of both in one batch.
+  const double ky = r * one_minus_s * tan_beta;
+  for (int i = 0; i < m; ++i) {
+    const double jx = r * (tf - theta[i] - one_minus_s * (sin_tf - sn[i]));
+    ex[i] = -std::abs(jx) / p.shear_modulus_x;
+    ex[m + i] = -std::abs(ky * (tf - theta[i])) / p.shear_modulus_y;
+  }
+  exp_n(pw, pw, m);
+  exp_n(ex, ex, lateral ? 2 * m : m);
+  double s_sig_sn = 0.0, s_sig_c = 0.0, s_tau_c = 0.0, s_tau_sn = 0.0, s_tau = 0.0, s_tau_y = 0.0;
+  const double h_rear = h / std::max(-tr, 1e-300), h_front = h / tf;
+  for (int i = 0; i < m; ++i) {
+    const double sigma = cos_eff[i] > cos_tf ? k_eq_ * pw[i] : 0.0;
+    const double strength = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
+    const double w_tau = w[i] * (strength * (1.0 - ex[i])), w_sig = w[i] * sigma;
+    s_sig_sn += w_sig * sn[i];
+    s_sig_c += w_sig * c[i];
+    s_tau_c += w_tau * c[i];
+    s_tau_sn += w_tau * sn[i];
+    s_tau += w_tau;
+    if (lateral) {
+      // Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the reference point
+      // (theta = 0) to 0 at theta_r and theta_f.
+      const double t = theta[i];
+      const double h_theta = std::max(t < 0.0 ? (t - tr) * h_rear : (tf - t) * h_front, 0.0);
+      const double rb = d1_ * (p.cohesion * h_theta + d2_ * weight_density * h_theta * h_theta / 2.0);
+      const double fs = rb * (r - h_theta * c[i]);
+      s_tau_y += w[i] * (strength * (1.0 - ex[m + i]) + fs / (r * b));
+    }
+  }
+  out.fx_pressure = -sdir * r * b * s_sig_sn;  // eq 30, compaction resistance
+  out.fz_pressure = r * b * s_sig_c;           // eq 32, normal stress
+  out.fx_shear = r * b * s_tau_c;              // eq 30, shear
+  out.fz_shear = sdir * r * b * s_tau_sn;      // eq 32, shear
+  out.torque_shear = r * r * b * s_tau;
+  if (lateral) out.fy_shear = r * b * s_tau_y;  // eq 31
   return out;
 }
 
