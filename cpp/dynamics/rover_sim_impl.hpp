@@ -121,6 +121,10 @@ struct RoverSim::Impl {
   std::array<detail::GroundContact, 4> ground{};
   std::array<detail::MotorRow, 6> motor{};  // wheels FL..RR, yaw, roll
   Vec3 yaw_axis = Vec3::UnitZ(), roll_axis = Vec3::UnitX();
+  // Gimbal angles and axes of the current bodies, from read_outputs(); step() uses them unless
+  // restore() changed the bodies since (start_current false).
+  double start_psi = 0.0, start_phi = 0.0;
+  bool start_current = false;
   std::array<Vec3, 6> base_force{}, base_torque{};  // explicit forces of this step
   std::array<dContact, detail::kMaxObstacleContacts> obstacle_contact{};
   std::array<dBodyID, 2 * detail::kMaxObstacleContacts> obstacle_bodies{};

@@ -598,8 +598,12 @@ void RoverSim::Impl::step() {
   if (diverged)
     throw SimulationDiverged("RoverSim: the simulation diverged earlier; restore() or reset() first");
   init_ode_once();
-  double psi, phi, psid, phid;
-  gimbal_angles(psi, phi, psid, phid, yaw_axis, roll_axis);
+  double psi = start_psi, phi = start_phi;
+  if (!start_current) {  // the bodies changed since read_outputs() (restore)
+    double psid, phid;
+    gimbal_angles(psi, phi, psid, phid, yaw_axis, roll_axis);
+  }
+  start_current = false;
   base_force.fill(Vec3::Zero());
   base_torque.fill(Vec3::Zero());
   prepare_actuators(psi, phi);
@@ -695,6 +699,12 @@ void RoverSim::Impl::read_outputs(double dt) {
   double psi, phi, psid, phid;
   Vec3 ez, ea;
   gimbal_angles(psi, phi, psid, phid, ez, ea);
+  // What the next step starts from (the bodies do not change before it unless restored).
+  start_psi = psi;
+  start_phi = phi;
+  yaw_axis = ez;
+  roll_axis = ea;
+  start_current = true;
   st.gimbal_yaw = psi;
   st.gimbal_roll = phi;
   st.gimbal_yaw_rate = psid;
@@ -786,12 +796,12 @@ void RoverSim::Impl::check_divergence() {
     std::string what;
     if (!x.allFinite() || !v.allFinite() || !w.allFinite()) {
       what = "non-finite state";
-    } else if (v.norm() > opt.max_speed) {
+    } else if (v.squaredNorm() > opt.max_speed * opt.max_speed) {
       what = "speed " + std::to_string(v.norm()) + " m/s > max_speed " + std::to_string(opt.max_speed);
-    } else if (w.norm() > opt.max_angular_speed) {
+    } else if (w.squaredNorm() > opt.max_angular_speed * opt.max_angular_speed) {
       what = "angular speed " + std::to_string(w.norm()) + " rad/s > max_angular_speed " +
              std::to_string(opt.max_angular_speed);
-    } else if (x.norm() > 1e6) {
+    } else if (x.squaredNorm() > 1e12) {
       what = "position beyond 1e6 m";
     }
     if (!what.empty()) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -32,6 +33,8 @@ inline double poly_sin_t2(double t, double t2) {
          t2 * (1.0 / 355687428096000.0)))))))));
 }
 
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
 
 // For a braking wheel (s < 0) j_x of eq 21 can change sign inside the contact patch, and |j_x|
@@ -41,12 +44,12 @@ inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
 // bracketed in (max(t_r, -t_c), t_c) where g is increasing. Returns NaN if there is none.
 double jx_sign_change(double tf, double sin_tf, double tr, double s) {
   const double k = 1.0 - s;
-  if (s >= 0.0) return std::nan("");
+  if (s >= 0.0) return kNaN;
   const double tc = std::acos(1.0 / k);
-  if (tf <= tc) return std::nan("");
+  if (tf <= tc) return kNaN;
   auto g = [&](double t) { return tf - t - k * (sin_tf - std::sin(t)); };
   double lo = std::max(tr, -tc), hi = tc;
-  if (g(lo) >= 0.0) return std::nan("");
+  if (g(lo) >= 0.0) return kNaN;
   double t = 0.5 * (lo + hi);
   for (int it = 0; it < 30; ++it) {  // safeguarded Newton: stays inside the shrinking bracket
     const double gt = g(t);
@@ -120,7 +123,7 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
   out.sinkage = h;
   const double cos_tf = 1.0 - h / r;
   const double tf = std::acos(cos_tf);  // eq 13
-  const double sin_tf = std::sin(tf);
+  const double sin_tf = std::sqrt(h / r * (2.0 - h / r));  // sin(acos(1 - h/r)), no cancellation
   // eq 16: t_rest -> 0 at full rest makes the stress distribution symmetric (no net F_x).
   const double t_rest =
       std::min((st.vx * st.vx + st.vcx * st.vcx) / (p.eps_motion * p.eps_motion), 1.0);
