@@ -101,8 +101,8 @@ struct RoverSim::Impl {
   dJointID gimbal = nullptr;        // universal joint with the stops
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
   dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
-  // Ground contact feedback: the contact with the terrain normal (N) and, when the normal force
-  // is a guessed unbounded row, the second contact (L) that carries it (rover_step.cpp, emit()).
+  // Ground feedback: the contact with the terrain normal and, on rigid ground when the normal
+  // force is a guessed unbounded row, that row (rover_step.cpp, emit()).
   std::array<dJointFeedback, 4> ground_fb{}, ground_fb_l{};
   std::vector<dGeomID> obstacle_geoms;
   std::exception_ptr callback_error;
@@ -162,6 +162,8 @@ struct RoverSim::Impl {
     int body1, body2;  // the row drives (w_1 - w_2) . axis
   };
   DriveRow drive_row(int k) const;
+  void add_row(dBodyID b, const Vec3& point, const Vec3& dir, double motion, double cfm,
+               dJointFeedback* fb);
   enum class RigidEmit { None, Guessed, Bounded };
   RigidEmit rigid_emit(const std::int8_t* modes, int wheel) const;
   void emit(const std::int8_t* modes);

@@ -275,6 +275,26 @@ RoverSim::Impl::RigidEmit RoverSim::Impl::rigid_emit(const std::int8_t* modes, i
   return RigidEmit::Bounded;
 }
 
+// One unbounded velocity row lambda = (motion - v . dir) / cfm, v the velocity of `point` on the
+// wheel body b (dir unit). ODE's DBall joint is the one joint made of a single unbounded row at
+// a chosen point and direction: anchors at the point and a distance L behind it along dir; with
+// ERP = 1 its right-hand side is (target distance - distance) / dt, so a target of L + motion dt
+// gives the motion (L > 2 |motion| dt keeps the target positive, as ODE requires). Unlike a
+// contact's friction row it brings no slack normal row along.
+void RoverSim::Impl::add_row(dBodyID b, const Vec3& point, const Vec3& dir, double motion,
+                             double cfm, dJointFeedback* fb) {
+  const double behind = 1.0 + 2.0 * std::abs(motion) * opt.dt;
+  const Vec3 a2 = point - behind * dir;
+  dJointID j = dJointCreateDBall(world, contacts);
+  dJointAttach(j, b, nullptr);
+  dJointSetDBallAnchor1(j, point.x(), point.y(), point.z());
+  dJointSetDBallAnchor2(j, a2.x(), a2.y(), a2.z());
+  dJointSetDBallDistance(j, behind + motion * opt.dt);
+  dJointSetDBallParam(j, dParamERP, 1.0);
+  dJointSetDBallParam(j, dParamCFM, cfm);
+  if (fb) dJointSetFeedback(j, fb);
+}
+
 // Joints and forces of one attempt. modes == nullptr: every guessed row with its bounds.
 void RoverSim::Impl::emit(const std::int8_t* modes) {
   std::array<Vec3, 6> f = base_force, t = base_torque;
@@ -302,12 +322,10 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
     }
   }
   // ---- ground
-  // Rows at the patch are ODE contact rows, and a contact joint has a normal row (bounded, >= 0)
-  // and up to two friction rows, along fdir1 and normal x fdir1. Contact N has the terrain
-  // normal n and the x (and on soil maybe y) rows; its normal row carries the normal force when
-  // that is solved bounded. When the normal force is guessed positive it is an unbounded row
-  // instead: the friction row (fdir1 = n) of a second contact L whose "normal" is x, with the y
-  // row as L's second row (x × n = -y); N's and L's normal rows are then kept slack.
+  // The x and y rows at the patch are the friction rows of an ODE contact with the terrain
+  // normal n (fdir1 = x, then n × x = y), whose own normal row carries the normal force when that
+  // is solved with its bound (>= 0). When the normal force is guessed positive it is an
+  // unbounded row instead (add_row) and the contact's normal row is kept slack.
   const bool soft = opt.ground == GroundType::Soil;
   struct Slot {
     Vec3 dir;
@@ -354,11 +372,10 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
       if (how == RigidEmit::Guessed) {
         // The §3.4 spring–damper as ODE's normal row would apply it (lambda = (erp depth / dt
         // - v_n) / cfm), and sticking friction rows with the contact's slip.
-        const Slot l[2] = {{g.n, dInfinity, rigid_cfm, rigid_erp * g.depth / opt.dt},
-                           {g.fy, dInfinity, opt.rigid_slip, 0.0}};
-        const Slot n[1] = {{g.fx, dInfinity, opt.rigid_slip, 0.0}};
-        make(g.n, -kSlackSpeed, rigid_cfm, n, 1, &ground_fb[i]);
-        make(g.fx, -kSlackSpeed, rigid_cfm, l, 2, &ground_fb_l[i]);
+        const Slot xy[2] = {{g.fx, dInfinity, opt.rigid_slip, 0.0},
+                            {g.fy, dInfinity, opt.rigid_slip, 0.0}};
+        make(g.n, -kSlackSpeed, rigid_cfm, xy, 2, &ground_fb[i]);
+        add_row(wb, g.point, g.n, rigid_erp * g.depth / opt.dt, rigid_cfm, &ground_fb_l[i]);
         continue;
       }
       dContact ct;
@@ -388,9 +405,9 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
     //     at 0 (the wheel leaves the soil faster than F_z / c): no row, no force.
     const double c = opt.soil_normal_damping;
     const std::int8_t normal_mode = mode_of(kRowsPerWheel * i + kNormal);
-    Slot slots_n[2], slots_l[2];
-    int nn = 0, nl = 0;
-    if (normal_mode == kFree) slots_l[nl++] = Slot{g.n, dInfinity, 1.0 / c, g.fz / c};
+    Slot slots[2];  // x then y: with fdir1 = x the second friction row is n × x = y
+    int ns = 0;
+    bool x_row = false;
     // (a) Shear rows: at a guessed bound, explicit forces at the patch.
     for (int k = 0; k < 2; ++k) {
       const double bound = k == 0 ? g.ax : g.ay;
@@ -402,15 +419,23 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
         continue;
       }
       const double slip = (k == 0 ? opt.soil.eps_contact_x : opt.soil.eps_contact_y) / bound;
-      const Slot slot{dir, mode == kFree ? dInfinity : bound, slip, 0.0};
-      // y goes with the damper on L when there is one (x × n = -y); else on N (n × x = y).
-      if (k == 1 && normal_mode == kFree) slots_l[nl++] = slot;
-      else slots_n[nn++] = slot;
+      slots[ns++] = Slot{dir, mode == kFree ? dInfinity : bound, slip, 0.0};
+      x_row = x_row || k == 0;
     }
-    if (normal_mode == kBounded || nn > 0)
-      make(g.n, normal_mode == kBounded ? g.fz / c : -kSlackSpeed, 1.0 / c, slots_n, nn,
-           &ground_fb[i]);
-    if (nl > 0) make(g.fx, -kSlackSpeed, 1.0 / c, slots_l, nl, nullptr);
+    if (normal_mode == kFree && !x_row) {
+      // Normal force and at most the y row: one contact whose "normal" is x (kept slack), the
+      // normal force as its friction row along n, y as its second (x × n = -y).
+      Slot l[2] = {{g.n, dInfinity, 1.0 / c, g.fz / c}};
+      if (ns > 0) l[1] = slots[0];
+      make(g.fx, -kSlackSpeed, 1.0 / c, l, 1 + ns, nullptr);
+    } else {
+      // The contact along n with the x (and y) rows, its normal row bounded or slack, and a
+      // guessed normal force as its own row (two contacts would bring two slack rows).
+      if (normal_mode == kFree) add_row(wb, g.point, g.n, g.fz / c, 1.0 / c, nullptr);
+      if (normal_mode == kBounded || ns > 0)
+        make(g.n, normal_mode == kBounded ? g.fz / c : -kSlackSpeed, 1.0 / c, slots, ns,
+             &ground_fb[i]);
+    }
     // (b) Compaction row on the wheel centre.
     if (g.comp > 0.0) {
       const std::int8_t mode = mode_of(kRowsPerWheel * i + kCompaction);
