@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <exception>
 #include <vector>
@@ -114,6 +115,12 @@ struct RoverSim::Impl {
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
   std::array<bool, 2> stop_set{};  // the gimbal's yaw / roll stop is set (prepare_actuators)
+  // The drives' AMotor parameters as last set (target rate, torque bound), NaN = never (emit()).
+  std::array<std::array<double, 2>, 6> motor_set = [] {
+    std::array<std::array<double, 2>, 6> a{};
+    for (auto& v : a) v = {std::nan(""), std::nan("")};
+    return a;
+  }();
   Vec3 pending_force = Vec3::Zero();
   bool diverged = false;
 

@@ -313,12 +313,15 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
       t[d.body1] += d.axis * lambda;
       t[d.body2] -= d.axis * lambda;
     }
-    if (k < 4) {
-      dJointSetAMotorParam(wheel_motor[k], dParamVel, m.target);
-      dJointSetAMotorParam(wheel_motor[k], dParamFMax, fmax);
-    } else {
-      dJointSetAMotorParam(gimbal_motor, k == 4 ? dParamVel : dParamVel2, m.target);
-      dJointSetAMotorParam(gimbal_motor, k == 4 ? dParamFMax : dParamFMax2, fmax);
+    // (only what changed: the joints keep their parameters between steps)
+    const dJointID jm = k < 4 ? wheel_motor[k] : gimbal_motor;
+    if (!(motor_set[k][0] == m.target)) {
+      dJointSetAMotorParam(jm, k == 5 ? dParamVel2 : dParamVel, m.target);
+      motor_set[k][0] = m.target;
+    }
+    if (!(motor_set[k][1] == fmax)) {
+      dJointSetAMotorParam(jm, k == 5 ? dParamFMax2 : dParamFMax, fmax);
+      motor_set[k][1] = fmax;
     }
   }
   // ---- ground

@@ -186,15 +186,16 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
   // eqs 19 and 21 with |j_x| (unit shear level: eq 28 scales it by clamp(-v_cx / eps)), and
   // eqs 20 and 22 for y: the exponents of both in one batch.
   const double ky = r * one_minus_s * tan_beta;
+  const double inv_kx = 1.0 / p.shear_modulus_x, inv_ky = 1.0 / p.shear_modulus_y;
   for (int i = 0; i < m; ++i) {
     const double jx = r * (tf - theta[i] - one_minus_s * (sin_tf - sn[i]));
-    ex[i] = -std::abs(jx) / p.shear_modulus_x;
-    ex[m + i] = -std::abs(ky * (tf - theta[i])) / p.shear_modulus_y;
+    ex[i] = -std::abs(jx) * inv_kx;
+    ex[m + i] = -std::abs(ky * (tf - theta[i])) * inv_ky;
   }
   exp_n(pw, pw, m);
   exp_n(ex, ex, lateral ? 2 * m : m);
   double s_sig_sn = 0.0, s_sig_c = 0.0, s_tau_c = 0.0, s_tau_sn = 0.0, s_tau = 0.0, s_tau_y = 0.0;
-  const double h_rear = h / std::max(-tr, 1e-300), h_front = h / tf;
+  const double h_rear = h / std::max(-tr, 1e-300), h_front = h / tf, inv_rb = 1.0 / (r * b);
   for (int i = 0; i < m; ++i) {
     const double sigma = cos_eff[i] > cos_tf ? k_eq_ * pw[i] : 0.0;
     const double strength = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
@@ -211,7 +212,7 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
       const double h_theta = std::max(t < 0.0 ? (t - tr) * h_rear : (tf - t) * h_front, 0.0);
       const double rb = d1_ * (p.cohesion * h_theta + d2_ * weight_density * h_theta * h_theta / 2.0);
       const double fs = rb * (r - h_theta * c[i]);
-      s_tau_y += w[i] * (strength * (1.0 - ex[m + i]) + fs / (r * b));
+      s_tau_y += w[i] * (strength * (1.0 - ex[m + i]) + fs * inv_rb);
     }
   }
   out.fx_pressure = -sdir * r * b * s_sig_sn;  // eq 30, compaction resistance
