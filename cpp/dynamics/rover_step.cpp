@@ -161,7 +161,8 @@ void RoverSim::Impl::prepare_ground() {
     // projected on the terrain, z the terrain normal.
     const Vec3 n = dp.normal;
     Vec3 fx = a.cross(n);
-    fx = fx.norm() > 1e-9 ? Vec3(fx.normalized()) : Vec3(rot(parent_of(i)).col(0));
+    const double fx_norm = fx.norm();
+    fx = fx_norm > 1e-9 ? Vec3(fx * (1.0 / fx_norm)) : Vec3(rot(parent_of(i)).col(0));
     g.n = n;
     g.fx = fx;
     g.fy = n.cross(fx);

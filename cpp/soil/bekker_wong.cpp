@@ -158,7 +158,7 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
   // in batched calls (common/vector_math.hpp).
   alignas(32) double theta[kCapacity], w[kCapacity], c[kCapacity], sn[kCapacity];
   alignas(32) double cos_eff[kCapacity], pw[kCapacity], ex[2 * kCapacity];
-  int m = 0;
+  int m = 0, m_rear = 0;  // nodes; those behind theta_m (the panels below that cut)
   for (int panel = 0; panel + 1 < ncuts; ++panel) {
     const double lo = cuts[panel], hi = cuts[panel + 1];
     if (!(hi > lo)) continue;
@@ -167,20 +167,24 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
       theta[m] = mid + half * nodes_[k];
       w[m] = half * weights_[k];
     }
+    if (hi <= tm) m_rear = m;
   }
   if (m == 0) return out;
 
-  // eq 18: theta' maps [theta_r, theta_m] onto [theta_f, theta_m]; theta' = theta in front.
-  const double map_slope = (tf - tm) / (tm - tr);
   for (int i = 0; i < m; ++i) {
     const double t = theta[i], t2 = t * t;
     c[i] = poly_cos_t2(t2);
     sn[i] = poly_sin_t2(t, t2);
-    const double tmap = tf - (t - tr) * map_slope;
-    cos_eff[i] = t < tm ? poly_cos_t2(tmap * tmap) : c[i];
-    // eq 17, with (cos theta' - cos theta_f)^n written as exp(n log(.)).
-    pw[i] = std::max(cos_eff[i] - cos_tf, 1e-300);
   }
+  // eq 18: theta' maps [theta_r, theta_m] onto [theta_f, theta_m]; theta' = theta in front.
+  const double map_slope = (tf - tm) / (tm - tr);
+  for (int i = 0; i < m_rear; ++i) {
+    const double tmap = tf - (theta[i] - tr) * map_slope;
+    cos_eff[i] = poly_cos_t2(tmap * tmap);
+  }
+  for (int i = m_rear; i < m; ++i) cos_eff[i] = c[i];
+  // eq 17, with (cos theta' - cos theta_f)^n written as exp(n log(.)).
+  for (int i = 0; i < m; ++i) pw[i] = std::max(cos_eff[i] - cos_tf, 1e-300);
   log_n(pw, pw, m);
   for (int i = 0; i < m; ++i) pw[i] *= n;
   // eqs 19 and 21 with |j_x| (unit shear level: eq 28 scales it by clamp(-v_cx / eps)), and
