@@ -143,8 +143,6 @@ DeepestPoint deepest_point(const HeightMap& hm, const Vec3& centre, const Vec3& 
   return dp;
 }
 
-inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
-
 }  // namespace detail
 
 using namespace detail;
@@ -218,6 +216,8 @@ void RoverSim::Impl::build() {
 
   std::mt19937_64 rng(opt.seed);
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
+  rigid_erp_ = opt.rigid.erp(opt.dt);
+  rigid_cfm_ = opt.rigid.cfm(opt.dt);
 
   // Bodies in the nominal pose (rover frame = world, psi = phi = 0); reset() moves them.
   dMass m;

@@ -5,6 +5,7 @@
 #include <ode/ode.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -59,6 +60,26 @@ static_assert(kGuessedRowCount == kRollMotor + 1, "Snapshot::row_mode covers eve
 /// Guess for a bounded row: inside its bounds (solved as an unbounded row, hence factorised with
 /// the joints instead of pivoted), or at its upper / lower bound (applied as an explicit force).
 constexpr std::int8_t kFree = 0, kAtHi = 1, kAtLo = 2;
+constexpr std::int8_t kBounded = 3;  // emit the row with its bounds and let ODE pivot
+constexpr int kMaxGuesses = 3;       // guesses of a step before failing rows are bounded
+// Below 1 mN a soil row is dropped: a CFM of eps / F would overflow the LCP as F -> 0.
+constexpr double kMinRowBound = 1e-3;
+constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
+constexpr double kStickMargin = 0.8;   // rigid friction above 0.8 mu F_n: solved bounded next step
+
+inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
+
+// Where a soft row's law lambda = u puts it for bounds +-bound.
+inline std::int8_t status_of(double u, double bound) {
+  return u >= bound ? kAtHi : (u <= -bound ? kAtLo : kFree);
+}
+
+// A force at a point: added to a body's force and, about its centre of mass (arm from it), its
+// torque.
+inline void add_at(Vec3& f, Vec3& t, const Vec3& force, const Vec3& arm) {
+  f += force;
+  t += arm.cross(force);
+}
 
 // Per-wheel ground contact of the current step (configuration at the start of the step).
 struct GroundContact {
@@ -88,6 +109,7 @@ struct RoverSim::Impl {
   SimOptions opt;
   soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
   double mu = 0.5;
+  double rigid_erp_ = 0.0, rigid_cfm_ = 0.0;  // §3.4 spring–damper as ERP / CFM at opt.dt
 
   dWorldID world = nullptr;
   dThreadingImplementationID threading = nullptr;
@@ -174,6 +196,7 @@ struct RoverSim::Impl {
   enum class RigidEmit { None, Guessed, Bounded };
   RigidEmit rigid_emit(const std::int8_t* modes, int wheel) const;
   void emit(const std::int8_t* modes);
+  void emit_ground(int wheel, const std::int8_t* modes, Vec3& wheel_force, Vec3& wheel_torque);
   bool settle(const std::int8_t* modes, std::int8_t* next);
   bool settle_rigid(int wheel, const std::int8_t* modes, const Vec3& patch_velocity,
                     std::int8_t* next);

@@ -1,0 +1,358 @@
+// ERNEST on ODE: the constraint rows of one attempt at a step (rover_step.cpp): how each guessed
+// row is emitted to ODE (emit) and how its law is checked after the step (settle). Equation
+// numbers refer to seed 004.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+#include <string>
+
+#include "ernest/dynamics/rover_sim_impl.hpp"
+
+namespace ernest::dynamics {
+
+using namespace detail;
+
+// Drive k (wheels 0..3, yaw, roll): its guessed row, its axis and the bodies it acts between.
+RoverSim::Impl::DriveRow RoverSim::Impl::drive_row(int k) const {
+  if (k < 4) return {kRowsPerWheel * k + kWheelMotor, ground[k].axle, 2 + k, parent_of(k)};
+  return {kYawMotor + (k - 4), k == 4 ? yaw_axis : roll_axis, kChassis, kBogie};
+}
+
+// Rigid ground (§3.4) under wheel i: the contact's rows are guessed like the soil's. Normal at 0
+// (separating): no contact at all. Normal pushing and both friction rows inside mu times it
+// (sticking, the rolling wheel's usual case): three unbounded rows. A friction row at its bound
+// (sliding): ODE's own contact with its bounds, because the bound, mu times the normal force, is
+// itself unknown, so no explicit force can stand for it.
+RoverSim::Impl::RigidEmit RoverSim::Impl::rigid_emit(const std::int8_t* modes, int wheel) const {
+  if (!modes) return RigidEmit::Bounded;
+  const std::int8_t* m = modes + kRowsPerWheel * wheel;
+  if (m[kNormal] == kAtLo) return RigidEmit::None;
+  if (m[kNormal] == kFree && m[kShearX] == kFree && m[kShearY] == kFree) return RigidEmit::Guessed;
+  return RigidEmit::Bounded;
+}
+
+// One unbounded velocity row lambda = (motion - v . dir) / cfm, v the velocity of `point` on the
+// wheel body b (dir unit). ODE's DBall joint is the one joint made of a single unbounded row at
+// a chosen point and direction: anchors at the point and a distance L behind it along dir; with
+// ERP = 1 its right-hand side is (target distance - distance) / dt, so a target of L + motion dt
+// gives the motion (L > 2 |motion| dt keeps the target positive, as ODE requires). Unlike a
+// contact's friction row it brings no slack normal row along.
+void RoverSim::Impl::add_row(dBodyID b, const Vec3& point, const Vec3& dir, double motion,
+                             double cfm, dJointFeedback* fb) {
+  const double behind = 1.0 + 2.0 * std::abs(motion) * opt.dt;
+  const Vec3 a2 = point - behind * dir;
+  dJointID j = dJointCreateDBall(world, contacts);
+  dJointAttach(j, b, nullptr);
+  dJointSetDBallAnchor1(j, point.x(), point.y(), point.z());
+  dJointSetDBallAnchor2(j, a2.x(), a2.y(), a2.z());
+  dJointSetDBallDistance(j, behind + motion * opt.dt);
+  dJointSetDBallParam(j, dParamERP, 1.0);
+  dJointSetDBallParam(j, dParamCFM, cfm);
+  if (fb) dJointSetFeedback(j, fb);
+}
+
+// The x and y rows at the patch are the friction rows of an ODE contact with the terrain
+// normal n (fdir1 = x, then n × x = y), whose own normal row carries the normal force when that
+// is solved with its bound (>= 0). When the normal force is guessed positive it is an
+// unbounded row instead (add_row) and the contact's normal row is kept slack.
+void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3& tw) {
+  const auto mode_of = [&](int row) { return modes ? modes[row] : kBounded; };
+  const bool soft = opt.ground == GroundType::Soil;
+  struct Slot {
+    Vec3 dir;
+    double mu, slip, motion;
+  };
+  const GroundContact& g = ground[i];
+  if (!g.active) return;
+  const dBodyID wb = body[2 + i];
+  const auto make = [&](const Vec3& normal, double motion_n, double cfm_n, const Slot* slots,
+                        int n_slots, dJointFeedback* fb) {
+    dContact cj;
+    std::memset(&cj, 0, sizeof cj);
+    for (int k = 0; k < 3; ++k) {
+      cj.geom.pos[k] = g.point[k];
+      cj.geom.normal[k] = normal[k];
+    }
+    cj.geom.depth = 0.0;  // no position correction: every row is a velocity law
+    cj.surface.mode = dContactMu2 | dContactFDir1 | dContactSlip1 | dContactSlip2 |
+                      dContactMotion1 | dContactMotion2 | dContactMotionN | dContactSoftERP |
+                      dContactSoftCFM;
+    cj.surface.soft_erp = 0.0;
+    cj.surface.soft_cfm = cfm_n;
+    cj.surface.motionN = motion_n;
+    if (n_slots > 0) {
+      for (int k = 0; k < 3; ++k) cj.fdir1[k] = slots[0].dir[k];
+      cj.surface.mu = slots[0].mu;
+      cj.surface.slip1 = slots[0].slip;
+      cj.surface.motion1 = slots[0].motion;
+    }
+    if (n_slots > 1) {  // along normal x fdir1
+      cj.surface.mu2 = slots[1].mu;
+      cj.surface.slip2 = slots[1].slip;
+      cj.surface.motion2 = slots[1].motion;
+    }
+    dJointID j = dJointCreateContact(world, contacts, &cj);
+    dJointAttach(j, wb, nullptr);
+    if (fb) dJointSetFeedback(j, fb);
+  };
+  if (!soft) {
+    const RigidEmit how = rigid_emit(modes, i);
+    if (how == RigidEmit::None) return;
+    if (how == RigidEmit::Guessed) {
+      // The §3.4 spring–damper as ODE's normal row would apply it (lambda = (erp depth / dt
+      // - v_n) / cfm), and sticking friction rows with the contact's slip.
+      const Slot xy[2] = {{g.fx, dInfinity, opt.rigid_slip, 0.0},
+                          {g.fy, dInfinity, opt.rigid_slip, 0.0}};
+      make(g.n, -kSlackSpeed, rigid_cfm_, xy, 2, &ground_fb[i]);
+      add_row(wb, g.point, g.n, rigid_erp_ * g.depth / opt.dt, rigid_cfm_, &ground_fb_l[i]);
+      return;
+    }
+    dContact ct;
+    std::memset(&ct, 0, sizeof ct);
+    for (int k = 0; k < 3; ++k) {
+      ct.geom.pos[k] = g.point[k];
+      ct.geom.normal[k] = g.n[k];
+    }
+    // Coulomb friction mu (pyramid): ODE bounds these rows by mu times the normal force found
+    // before them (findex), an order-dependent approximation of Coulomb's law.
+    for (int k = 0; k < 3; ++k) ct.fdir1[k] = g.fx[k];
+    ct.geom.depth = g.depth;
+    ct.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
+                      dContactSlip2 | dContactFDir1;
+    ct.surface.mu = mu;
+    ct.surface.slip1 = ct.surface.slip2 = opt.rigid_slip;
+    ct.surface.soft_erp = rigid_erp_;
+    ct.surface.soft_cfm = rigid_cfm_;
+    dJointID j = dJointCreateContact(world, contacts, &ct);
+    dJointAttach(j, wb, nullptr);
+    dJointSetFeedback(j, &ground_fb[i]);
+    return;
+  }
+  // Soft soil.
+  // (c) Normal force F_n = max(0, F_z - c v_n): a damper around the soil's pressure force that
+  //     never pulls; lambda = (motion - v_n) / cfm with motion = F_z / c, cfm = 1 / c. Guessed
+  //     at 0 (the wheel leaves the soil faster than F_z / c): no row, no force.
+  const double c = opt.soil_normal_damping;
+  const std::int8_t normal_mode = mode_of(kRowsPerWheel * i + kNormal);
+  Slot slots[2];  // x then y: with fdir1 = x the second friction row is n × x = y
+  int ns = 0;
+  bool x_row = false;
+  // (a) Shear rows: at a guessed bound, explicit forces at the patch.
+  for (int k = 0; k < 2; ++k) {
+    const double bound = k == 0 ? g.ax : g.ay;
+    if (bound < kMinRowBound) continue;
+    const Vec3& dir = k == 0 ? g.fx : g.fy;
+    const std::int8_t mode = mode_of(kRowsPerWheel * i + (k == 0 ? kShearX : kShearY));
+    if (mode == kAtHi || mode == kAtLo) {
+      add_at(fw, tw, dir * (mode == kAtHi ? bound : -bound), g.arm);
+      continue;
+    }
+    const double slip = (k == 0 ? opt.soil.eps_contact_x : opt.soil.eps_contact_y) / bound;
+    slots[ns++] = Slot{dir, mode == kFree ? dInfinity : bound, slip, 0.0};
+    x_row = x_row || k == 0;
+  }
+  if (normal_mode == kFree && !x_row) {
+    // Normal force and at most the y row: one contact whose "normal" is x (kept slack), the
+    // normal force as its friction row along n, y as its second (x × n = -y).
+    Slot l[2] = {{g.n, dInfinity, 1.0 / c, g.fz / c}};
+    if (ns > 0) l[1] = slots[0];
+    make(g.fx, -kSlackSpeed, 1.0 / c, l, 1 + ns, nullptr);
+  } else {
+    // The contact along n with the x (and y) rows, its normal row bounded or slack, and a
+    // guessed normal force as its own row (two contacts would bring two slack rows).
+    if (normal_mode == kFree) add_row(wb, g.point, g.n, g.fz / c, 1.0 / c, nullptr);
+    if (normal_mode == kBounded || ns > 0)
+      make(g.n, normal_mode == kBounded ? g.fz / c : -kSlackSpeed, 1.0 / c, slots, ns,
+           &ground_fb[i]);
+  }
+  // (b) Compaction row on the wheel centre.
+  if (g.comp > 0.0) {
+    const std::int8_t mode = mode_of(kRowsPerWheel * i + kCompaction);
+    if (mode == kAtHi || mode == kAtLo) {
+      fw += g.fx * (mode == kAtHi ? g.comp : -g.comp);
+    } else {
+      const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
+      dJointID lm = dJointCreateLMotor(world, contacts);
+      dJointAttach(lm, wb, nullptr);
+      dJointSetLMotorNumAxes(lm, 1);
+      dJointSetLMotorAxis(lm, 0, 0, g.fx.x(), g.fx.y(), g.fx.z());
+      dJointSetLMotorParam(lm, dParamVel, 0.0);
+      dJointSetLMotorParam(lm, dParamFMax, mode == kFree ? dInfinity : g.comp);
+      dJointSetLMotorParam(lm, dParamCFM, eps_dir / g.comp);
+    }
+  }
+}
+
+// Joints and forces of one attempt. modes == nullptr: every guessed row with its bounds.
+void RoverSim::Impl::emit(const std::int8_t* modes) {
+  std::array<Vec3, 6> f = base_force, t = base_torque;
+  const auto mode_of = [&](int row) { return modes ? modes[row] : kBounded; };
+  // ---- drives
+  for (int k = 0; k < 6; ++k) {
+    const MotorRow& m = motor[k];
+    const DriveRow d = drive_row(k);
+    const int row = d.row;
+    const std::int8_t mode = m.bound > 0.0 ? mode_of(row) : kBounded;
+    double fmax = m.bound;
+    if (mode == kFree) fmax = dInfinity;
+    if (mode == kAtHi || mode == kAtLo) {
+      fmax = 0.0;
+      const double lambda = mode == kAtHi ? m.bound : -m.bound;
+      t[d.body1] += d.axis * lambda;
+      t[d.body2] -= d.axis * lambda;
+    }
+    // (only what changed: the joints keep their parameters between steps)
+    const dJointID jm = k < 4 ? wheel_motor[k] : gimbal_motor;
+    if (!(motor_set[k][0] == m.target)) {
+      dJointSetAMotorParam(jm, k == 5 ? dParamVel2 : dParamVel, m.target);
+      motor_set[k][0] = m.target;
+    }
+    if (!(motor_set[k][1] == fmax)) {
+      dJointSetAMotorParam(jm, k == 5 ? dParamFMax2 : dParamFMax, fmax);
+      motor_set[k][1] = fmax;
+    }
+  }
+  // ---- ground
+  for (int i = 0; i < 4; ++i) emit_ground(i, modes, f[2 + i], t[2 + i]);
+  // ---- rigid obstacles (always with their bounds: friction limits depend on the normal force)
+  for (int k = 0; k < n_obstacle_contacts; ++k) {
+    dJointID j = dJointCreateContact(world, contacts, &obstacle_contact[k]);
+    dJointAttach(j, obstacle_bodies[2 * k], obstacle_bodies[2 * k + 1]);
+  }
+  for (int b = 0; b < 6; ++b) {
+    dBodySetForce(body[b], f[b].x(), f[b].y(), f[b].z());
+    dBodySetTorque(body[b], t[b].x(), t[b].y(), t[b].z());
+  }
+  check_forces_before_step();
+}
+
+// Rigid ground under wheel i after the step: the contact's forces (from the joints' feedback) and
+// where Coulomb's law puts each row (next[]). Returns false if a guess was wrong: a guessed
+// contact whose normal force is negative or whose friction exceeds mu times it, or a missing one
+// that the spring–damper would push. A contact ODE solved with its bounds is right by
+// construction: only its outcome is recorded.
+bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& vp,
+                                  std::int8_t* next) {
+  const GroundContact& g = ground[i];
+  const int r = kRowsPerWheel * i;
+  const RigidEmit how = rigid_emit(modes, i);
+  if (how == RigidEmit::None) {
+    const double push = rigid_erp_ * g.depth / opt.dt - vp.dot(g.n);
+    next[r + kNormal] = push > 0.0 ? kFree : kAtLo;
+    next[r + kShearX] = next[r + kShearY] = kFree;
+    return push <= 0.0;
+  }
+  Vec3 f = to_vec(ground_fb[i].f1);
+  if (how == RigidEmit::Guessed) f += to_vec(ground_fb_l[i].f1);
+  const double fn = f.dot(g.n), fx = f.dot(g.fx), fy = f.dot(g.fy);
+  row_force[r + kNormal] = fn;
+  row_force[r + kShearX] = fx;
+  row_force[r + kShearY] = fy;
+  const double cap = mu * std::max(fn, 0.0);
+  next[r + kNormal] = fn > 0.0 ? kFree : kAtLo;
+  if (how == RigidEmit::Guessed) {
+    // The check is exact: |lambda| <= mu F_n. The outcome for the next step leaves a margin:
+    // friction near its cap is about to slide, and a failed guess costs a second step.
+    const bool ok = std::abs(fx) <= cap && std::abs(fy) <= cap;
+    next[r + kShearX] = status_of(fx, kStickMargin * cap);
+    next[r + kShearY] = status_of(fy, kStickMargin * cap);
+    if (!ok || !(fn > 0.0)) return false;
+    return true;
+  } else {
+    // ODE bounded these rows by mu times the normal force it had when it clamped them, which can
+    // be 30 % off the final one, so the force does not tell sliding from sticking; the slip
+    // velocity does: a row whose law lambda = -v_t / slip exceeds the bound is sliding.
+    const auto law = [&](const Vec3& dir) {
+      const double v = vp.dot(dir);
+      return opt.rigid_slip > 0.0 ? -v / opt.rigid_slip : (v == 0.0 ? 0.0 : -v * dInfinity);
+    };
+    next[r + kShearX] = status_of(law(g.fx), cap);
+    next[r + kShearY] = status_of(law(g.fy), cap);
+  }
+  if (how == RigidEmit::Bounded) return true;
+  return next[r + kNormal] == kFree && next[r + kShearX] == kFree && next[r + kShearY] == kFree;
+}
+
+// After dWorldStep: the force of every guessed row and where its law puts it (next[]); returns
+// whether every guess held. The laws are evaluated with the Jacobians of the start of the step
+// (as ODE built them) and the velocities at its end.
+bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
+  bool held = true;
+  const auto mode_of = [&](int row) { return modes ? modes[row] : kBounded; };
+  const auto outcome = [&](int row, std::int8_t status) {
+    const std::int8_t m = mode_of(row);
+    if (m != kBounded && m != status) held = false;
+    next[row] = status;
+  };
+  // ---- drives
+  for (int k = 0; k < 6; ++k) {
+    const MotorRow& m = motor[k];
+    const DriveRow d = drive_row(k);
+    const int row = d.row;
+    row_force[row] = 0.0;
+    if (!(m.bound > 0.0)) continue;
+    const Vec3& axis = d.axis;
+    const std::int8_t mode = mode_of(row);
+    if (mode == kAtHi || mode == kAtLo) {
+      const double rate = (to_vec(dBodyGetAngularVel(body[d.body1])) -
+                           to_vec(dBodyGetAngularVel(body[d.body2]))).dot(axis);
+      const double demand = (m.target - rate) / kWorldCfm;  // the row's unclamped force
+      row_force[row] = mode == kAtHi ? m.bound : -m.bound;
+      outcome(row, status_of(demand, m.bound) == mode ? mode : kFree);
+    } else {
+      const dJointFeedback& fb = k < 4 ? wheel_motor_fb[k] : gimbal_motor_fb;
+      const double lambda = to_vec(fb.t1).dot(axis);
+      row_force[row] = std::clamp(lambda, -m.bound, m.bound);
+      // A bounded row that ODE left at its bound is at it; a free row beyond it is not free.
+      outcome(row, mode == kBounded ? (std::abs(lambda) < m.bound ? kFree : status_of(lambda, m.bound))
+                                    : status_of(lambda, m.bound));
+    }
+  }
+  // ---- ground
+  const bool soft = opt.ground == GroundType::Soil;
+  for (int i = 0; i < 4; ++i) {
+    const GroundContact& g = ground[i];
+    for (int k : {kShearX, kShearY, kCompaction, kNormal}) row_force[kRowsPerWheel * i + k] = 0.0;
+    if (!g.active) continue;
+    const Vec3 v = to_vec(dBodyGetLinearVel(body[2 + i]));
+    const Vec3 vp = v + to_vec(dBodyGetAngularVel(body[2 + i])).cross(g.arm);
+    if (!soft) {
+      if (!settle_rigid(i, modes, vp, next)) held = false;
+      continue;
+    }
+    {  // normal force >= 0, F_z - c v_n at the patch: the row's law, or ODE's bounded row
+      const int row = kRowsPerWheel * i + kNormal;
+      const std::int8_t mode = mode_of(row);
+      if (mode == kBounded) {
+        row_force[row] = to_vec(ground_fb[i].f1).dot(g.n);
+        outcome(row, row_force[row] > 0.0 ? kFree : kAtLo);
+      } else {
+        const double total = g.fz - opt.soil_normal_damping * vp.dot(g.n);
+        row_force[row] = mode == kFree ? total : 0.0;
+        outcome(row, total > 0.0 ? kFree : kAtLo);
+      }
+    }
+    const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
+    struct SoftRow {
+      int kind;
+      double bound, u;  // u: the row's law, lambda = (target - J v) / cfm
+    };
+    const SoftRow rows[3] = {
+        {kShearX, g.ax >= kMinRowBound ? g.ax : 0.0, -vp.dot(g.fx) * g.ax / opt.soil.eps_contact_x},
+        {kShearY, g.ay >= kMinRowBound ? g.ay : 0.0, -vp.dot(g.fy) * g.ay / opt.soil.eps_contact_y},
+        {kCompaction, g.comp, -v.dot(g.fx) * g.comp / eps_dir}};
+    for (const SoftRow& r : rows) {
+      if (!(r.bound > 0.0)) continue;
+      const int row = kRowsPerWheel * i + r.kind;
+      const std::int8_t mode = mode_of(row);
+      row_force[row] = mode == kAtHi ? r.bound
+                       : mode == kAtLo ? -r.bound
+                                       : std::clamp(r.u, -r.bound, r.bound);
+      outcome(row, status_of(r.u, r.bound));
+    }
+  }
+  return held;
+}
+
+}  // namespace ernest::dynamics
