@@ -254,24 +254,20 @@ bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& v
   if (how == RigidEmit::Guessed) {
     // The check is exact: |lambda| <= mu F_n. The outcome for the next step leaves a margin:
     // friction near its cap is about to slide, and a failed guess costs a second step.
-    const bool ok = std::abs(fx) <= cap && std::abs(fy) <= cap;
     next[r + kShearX] = status_of(fx, kStickMargin * cap);
     next[r + kShearY] = status_of(fy, kStickMargin * cap);
-    if (!ok || !(fn > 0.0)) return false;
-    return true;
-  } else {
-    // ODE bounded these rows by mu times the normal force it had when it clamped them, which can
-    // be 30 % off the final one, so the force does not tell sliding from sticking; the slip
-    // velocity does: a row whose law lambda = -v_t / slip exceeds the bound is sliding.
-    const auto law = [&](const Vec3& dir) {
-      const double v = vp.dot(dir);
-      return opt.rigid_slip > 0.0 ? -v / opt.rigid_slip : (v == 0.0 ? 0.0 : -v * dInfinity);
-    };
-    next[r + kShearX] = status_of(law(g.fx), cap);
-    next[r + kShearY] = status_of(law(g.fy), cap);
+    return fn > 0.0 && std::abs(fx) <= cap && std::abs(fy) <= cap;
   }
-  if (how == RigidEmit::Bounded) return true;
-  return next[r + kNormal] == kFree && next[r + kShearX] == kFree && next[r + kShearY] == kFree;
+  // ODE bounded these rows by mu times the normal force it had when it clamped them, which can be
+  // 30 % off the final one, so the force does not tell sliding from sticking; the slip velocity
+  // does: a row whose law lambda = -v_t / slip exceeds the bound is sliding.
+  const auto law = [&](const Vec3& dir) {
+    const double v = vp.dot(dir);
+    return opt.rigid_slip > 0.0 ? -v / opt.rigid_slip : (v == 0.0 ? 0.0 : -v * dInfinity);
+  };
+  next[r + kShearX] = status_of(law(g.fx), cap);
+  next[r + kShearY] = status_of(law(g.fy), cap);
+  return true;
 }
 
 // After dWorldStep: the force of every guessed row and where its law puts it (next[]); returns
