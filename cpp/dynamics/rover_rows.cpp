@@ -101,11 +101,11 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
     if (how == RigidEmit::None) return;
     if (how == RigidEmit::Guessed) {
       // The §3.4 spring–damper as ODE's normal row would apply it (lambda = (erp depth / dt
-      // - v_n) / cfm), and sticking friction rows with the contact's slip.
-      const Slot xy[2] = {{g.fx, dInfinity, opt.rigid_slip, 0.0},
-                          {g.fy, dInfinity, opt.rigid_slip, 0.0}};
-      make(g.n, -kSlackSpeed, rigid_cfm_, xy, 2, &ground_fb[i]);
-      add_row(wb, g.point, g.n, rigid_erp_ * g.depth / opt.dt, rigid_cfm_, &ground_fb_l[i]);
+      // - v_n) / cfm), and sticking friction rows with the contact's slip: three one-row joints
+      // (no contact joint, so no slack normal row for ODE to carry).
+      add_row(wb, g.point, g.n, rigid_erp_ * g.depth / opt.dt, rigid_cfm_, &patch_fb[i][0]);
+      add_row(wb, g.point, g.fx, 0.0, opt.rigid_slip, &patch_fb[i][1]);
+      add_row(wb, g.point, g.fy, 0.0, opt.rigid_slip, &patch_fb[i][2]);
       return;
     }
     dContact ct;
@@ -243,8 +243,12 @@ bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& v
     next[r + kShearX] = next[r + kShearY] = kFree;
     return push <= 0.0;
   }
-  Vec3 f = to_vec(ground_fb[i].f1);
-  if (how == RigidEmit::Guessed) f += to_vec(ground_fb_l[i].f1);
+  Vec3 f = Vec3::Zero();
+  if (how == RigidEmit::Guessed) {
+    for (const dJointFeedback& fb : patch_fb[i]) f += to_vec(fb.f1);
+  } else {
+    f = to_vec(ground_fb[i].f1);
+  }
   const double fn = f.dot(g.n), fx = f.dot(g.fx), fy = f.dot(g.fy);
   row_force[r + kNormal] = fn;
   row_force[r + kShearX] = fx;

@@ -124,9 +124,10 @@ struct RoverSim::Impl {
   dJointID gimbal = nullptr;        // universal joint with the stops
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
   dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
-  // Ground feedback: the contact with the terrain normal and, on rigid ground when the normal
-  // force is a guessed unbounded row, that row (rover_step.cpp, emit()).
-  std::array<dJointFeedback, 4> ground_fb{}, ground_fb_l{};
+  // Ground feedback: the contact with the terrain normal (rows solved with their bounds), and
+  // the guessed rigid-ground rows (normal, x, y) of each wheel (rover_rows.cpp).
+  std::array<dJointFeedback, 4> ground_fb{};
+  std::array<std::array<dJointFeedback, 3>, 4> patch_fb{};
   std::vector<dGeomID> obstacle_geoms;
   std::exception_ptr callback_error;
 
