@@ -198,32 +198,26 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
   }
   exp_n(pw, pw, m);
   exp_n(ex, ex, lateral ? 2 * m : m);
-  // Weighted stresses per node (one vectorised pass), then the integrals as packet reductions.
-  alignas(32) double w_sig[kCapacity], w_tau[kCapacity], strength[kCapacity];
+  double s_sig_sn = 0.0, s_sig_c = 0.0, s_tau_c = 0.0, s_tau_sn = 0.0, s_tau = 0.0, s_tau_y = 0.0;
+  const double h_rear = h / std::max(-tr, 1e-300), h_front = h / tf, inv_rb = 1.0 / (r * b);
   for (int i = 0; i < m; ++i) {
     const double sigma = cos_eff[i] > cos_tf ? k_eq_ * pw[i] : 0.0;
-    strength[i] = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
-    w_tau[i] = w[i] * (strength[i] * (1.0 - ex[i]));
-    w_sig[i] = w[i] * sigma;
-  }
-  using Nodes = Eigen::Map<const Eigen::ArrayXd>;
-  const Nodes ws(w_sig, m), wt(w_tau, m), cm(c, m), sm(sn, m);
-  const double s_sig_sn = (ws * sm).sum(), s_sig_c = (ws * cm).sum();
-  const double s_tau_c = (wt * cm).sum(), s_tau_sn = (wt * sm).sum(), s_tau = wt.sum();
-  double s_tau_y = 0.0;
-  if (lateral) {
-    // Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the reference point (theta = 0)
-    // to 0 at theta_r and theta_f.
-    const double h_rear = h / std::max(-tr, 1e-300), h_front = h / tf, inv_rb = 1.0 / (r * b);
-    alignas(32) double w_tau_y[kCapacity];
-    for (int i = 0; i < m; ++i) {
+    const double strength = p.cohesion + sigma * tan_phi_;  // Mohr–Coulomb of eqs 19–20
+    const double w_tau = w[i] * (strength * (1.0 - ex[i])), w_sig = w[i] * sigma;
+    s_sig_sn += w_sig * sn[i];
+    s_sig_c += w_sig * c[i];
+    s_tau_c += w_tau * c[i];
+    s_tau_sn += w_tau * sn[i];
+    s_tau += w_tau;
+    if (lateral) {
+      // Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the reference point
+      // (theta = 0) to 0 at theta_r and theta_f.
       const double t = theta[i];
       const double h_theta = std::max(t < 0.0 ? (t - tr) * h_rear : (tf - t) * h_front, 0.0);
       const double rb = d1_ * (p.cohesion * h_theta + d2_ * weight_density * h_theta * h_theta / 2.0);
       const double fs = rb * (r - h_theta * c[i]);
-      w_tau_y[i] = w[i] * (strength[i] * (1.0 - ex[m + i]) + fs * inv_rb);
+      s_tau_y += w[i] * (strength * (1.0 - ex[m + i]) + fs * inv_rb);
     }
-    s_tau_y = Nodes(w_tau_y, m).sum();
   }
   out.fx_pressure = -sdir * r * b * s_sig_sn;  // eq 30, compaction resistance
   out.fz_pressure = r * b * s_sig_c;           // eq 32, normal stress
