@@ -103,7 +103,7 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
       // The §3.4 spring–damper as ODE's normal row would apply it (lambda = (erp depth / dt
       // - v_n) / cfm), and sticking friction rows with the contact's slip: three one-row joints
       // (no contact joint, so no slack normal row for ODE to carry).
-      add_row(wb, g.point, g.n, rigid_erp_ * g.depth / opt.dt, rigid_cfm_, &patch_fb[i][0]);
+      add_row(wb, g.point, g.n, contact_erp * g.depth / opt.dt, contact_cfm, &patch_fb[i][0]);
       add_row(wb, g.point, g.fx, 0.0, opt.rigid_slip, &patch_fb[i][1]);
       add_row(wb, g.point, g.fy, 0.0, opt.rigid_slip, &patch_fb[i][2]);
       return;
@@ -122,8 +122,8 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
                       dContactSlip2 | dContactFDir1;
     ct.surface.mu = mu;
     ct.surface.slip1 = ct.surface.slip2 = opt.rigid_slip;
-    ct.surface.soft_erp = rigid_erp_;
-    ct.surface.soft_cfm = rigid_cfm_;
+    ct.surface.soft_erp = contact_erp;
+    ct.surface.soft_cfm = contact_cfm;
     dJointID j = dJointCreateContact(world, contacts, &ct);
     dJointAttach(j, wb, nullptr);
     dJointSetFeedback(j, &ground_fb[i]);
@@ -238,7 +238,7 @@ bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& v
   const int r = kRowsPerWheel * i;
   const RigidEmit how = rigid_emit(modes, i);
   if (how == RigidEmit::None) {
-    const double push = rigid_erp_ * g.depth / opt.dt - vp.dot(g.n);
+    const double push = contact_erp * g.depth / opt.dt - vp.dot(g.n);
     next[r + kNormal] = push > 0.0 ? kFree : kAtLo;
     next[r + kShearX] = next[r + kShearY] = kFree;
     return push <= 0.0;

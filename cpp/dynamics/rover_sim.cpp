@@ -216,8 +216,8 @@ void RoverSim::Impl::build() {
 
   std::mt19937_64 rng(opt.seed);
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
-  rigid_erp_ = opt.rigid.erp(opt.dt);
-  rigid_cfm_ = opt.rigid.cfm(opt.dt);
+  contact_erp = opt.rigid.erp(opt.dt);
+  contact_cfm = opt.rigid.cfm(opt.dt);
 
   // Bodies in the nominal pose (rover frame = world, psi = phi = 0); reset() moves them.
   dMass m;

@@ -109,7 +109,7 @@ struct RoverSim::Impl {
   SimOptions opt;
   soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
   double mu = 0.5;
-  double rigid_erp_ = 0.0, rigid_cfm_ = 0.0;  // §3.4 spring–damper as ERP / CFM at opt.dt
+  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at opt.dt
 
   dWorldID world = nullptr;
   dThreadingImplementationID threading = nullptr;

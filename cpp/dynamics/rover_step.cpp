@@ -196,9 +196,8 @@ void RoverSim::Impl::near(dGeomID a, dGeomID b) {
   std::memset(cs, 0, sizeof cs);
   const int n = dCollide(a, b, kMaxContactsPerPair, &cs[0].geom, sizeof(dContact));
   if (n <= 0) return;
-  const double erp = rigid_erp_;
   // The §3.4 stiffness is per wheel–obstacle contact: n simultaneous points share it.
-  const double cfm = rigid_cfm_ * n;
+  const double cfm = contact_cfm * n;
   for (int k = 0; k < n && n_obstacle_contacts < kMaxObstacleContacts; ++k) {
     dContact& c = obstacle_contact[n_obstacle_contacts];
     c = cs[k];
@@ -206,7 +205,7 @@ void RoverSim::Impl::near(dGeomID a, dGeomID b) {
                      dContactSlip2;
     c.surface.slip1 = c.surface.slip2 = opt.rigid_slip;
     c.surface.mu = mu;
-    c.surface.soft_erp = erp;
+    c.surface.soft_erp = contact_erp;
     c.surface.soft_cfm = cfm;
     obstacle_bodies[2 * n_obstacle_contacts] = dGeomGetBody(a);
     obstacle_bodies[2 * n_obstacle_contacts + 1] = dGeomGetBody(b);
