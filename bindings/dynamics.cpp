@@ -153,6 +153,10 @@ void bind_dynamics(py::module_& m) {
       .def_readwrite("guess_active_set", &SimOptions::guess_active_set,
                      "guess the bounded rows' active set from the last step and verify it (same "
                      "solution, ~3x faster on soil); False always pivots in ODE's LCP")
+      .def_readwrite("sparse_lcp", &SimOptions::sparse_lcp,
+                     "solve steps whose rows are unbounded or at a zero bound by a sparse LDL^T "
+                     "(minimum-degree order) instead of ODE's dense solver (same solution to "
+                     "rounding); False: ODE's solver for every step")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def("validate", &SimOptions::validate, "Raise ValueError naming an invalid field.");
@@ -228,11 +232,17 @@ void bind_dynamics(py::module_& m) {
       .def_readonly("pivoted", &SolverStats::pivoted, "steps where ODE pivoted the rows whose guesses kept failing")
       .def_readonly("lcp_errors", &SolverStats::lcp_errors,
                     "steps on which ODE's pivoting LCP reported an internal error")
+      .def_readonly("sparse_solves", &SolverStats::sparse_solves,
+                    "constraint solves (one per attempt at a step) done by the sparse LDL^T")
+      .def_readonly("dense_solves", &SolverStats::dense_solves,
+                    "constraint solves handed to ODE's Dantzig solver")
       .def("__repr__", [](const SolverStats& s) {
         return "SolverStats(steps=" + std::to_string(s.steps) + ", first_guess=" +
                std::to_string(s.first_guess) + ", later_guess=" + std::to_string(s.later_guess) +
                ", pivoted=" + std::to_string(s.pivoted) + ", lcp_errors=" +
-               std::to_string(s.lcp_errors) + ")";
+               std::to_string(s.lcp_errors) + ", sparse_solves=" +
+               std::to_string(s.sparse_solves) + ", dense_solves=" +
+               std::to_string(s.dense_solves) + ")";
       });
 
   py::class_<Snapshot>(m, "Snapshot", "Complete simulation state for RoverSim.restore().")

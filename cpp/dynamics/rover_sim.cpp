@@ -199,6 +199,7 @@ RoverSim::Impl::~Impl() {
 
 void RoverSim::Impl::build() {
   init_ode_once();
+  detail::sparse_lcp_active();  // find ODE's own solver now: throws here, not inside a step
   world = dWorldCreate();
   // ODE's default step threading implementation is one object shared by every world and is not
   // thread-safe (ReleaseAJob assertions when two worlds step on two threads): each world gets
@@ -359,6 +360,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   row_mode.fill(kFree);
   row_mode_before.fill(kFree);
   alternating = false;
+  lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);
   pending_force.setZero();
@@ -487,6 +489,7 @@ Snapshot RoverSim::snapshot() const {
   s.row_mode = impl_->row_mode;
   s.row_mode_before = impl_->row_mode_before;
   s.alternating = impl_->alternating;
+  impl_->lcp.save(s.solver_patterns);
   s.valid = true;
   return s;
 }
@@ -494,6 +497,7 @@ Snapshot RoverSim::snapshot() const {
 void RoverSim::restore(const Snapshot& s) {
   require(s.valid, "RoverSim.restore: empty snapshot");
   init_ode_once();
+  impl_->lcp.load(s.solver_patterns);  // first: it may throw on a corrupt snapshot
   for (int b = 0; b < 6; ++b) {
     const dBodyID id = impl_->body[b];
     const auto& sb = s.bodies[b];

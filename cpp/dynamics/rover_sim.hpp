@@ -56,6 +56,11 @@ struct SimOptions {
   /// every step; a wrong guess is retried and finally solved by pivoting. The result is the same
   /// LCP solution either way (to rounding); false always pivots (tests, comparisons).
   bool guess_active_set = true;
+  /// Solve the step's constraint system with a sparse LDLᵀ (minimum-degree order,
+  /// cpp/dynamics/sparse_ldlt.hpp) when every row is unbounded or rests at a zero bound, which
+  /// the guessed active set makes the usual case, instead of ODE's dense Dantzig solver; other
+  /// steps still go to ODE. The same solution to rounding; false: ODE's solver for every step.
+  bool sparse_lcp = true;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
   void validate() const;
@@ -130,6 +135,11 @@ struct SolverStats {
   /// Steps on which ODE's pivoting solver reported an internal error ("LCP internal error, s <=
   /// 0"): it then stops early with a wrong answer. Guessed steps never pivot the guessed rows.
   std::uint64_t lcp_errors = 0;
+  /// Constraint solves (one per attempt at a step) done by the sparse LDLᵀ (SimOptions::
+  /// sparse_lcp), and those handed to ODE's Dantzig solver (friction bounded by a normal force,
+  /// a bounded row off its zero bound, or sparse_lcp off).
+  std::uint64_t sparse_solves = 0;
+  std::uint64_t dense_solves = 0;
 };
 
 /// Complete simulation state; restore() reproduces the run bit for bit.
@@ -146,6 +156,9 @@ struct Snapshot {
   // active-set outcomes of the last two steps (guesses for the next)
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;
+  /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
+  /// of the steps that follow; internal layout, see cpp/dynamics/ode_lcp.hpp).
+  std::vector<std::uint64_t> solver_patterns;
   bool valid = false;
 };
 

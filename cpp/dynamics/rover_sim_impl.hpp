@@ -12,6 +12,7 @@
 #include <exception>
 #include <vector>
 
+#include "ernest/dynamics/ode_lcp.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/soil/bekker_wong.hpp"
 
@@ -162,6 +163,7 @@ struct RoverSim::Impl {
   std::array<Snapshot::Body, 6> saved{};        // bodies at the start of the step (retries)
   std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
   std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
+  detail::LcpWorkspace lcp;  // the sparse constraint solves (ode_lcp.hpp)
   int attempts_last_step = 0;                   // 1 = first guess right; kMaxGuesses + 1 = exact
   SolverStats stats{};
 

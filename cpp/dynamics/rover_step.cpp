@@ -296,6 +296,8 @@ void RoverSim::Impl::step() {
   bool held = false;
   alternating = false;
   const std::uint64_t lcp_messages = ode_lcp_messages;
+  lcp.enabled = opt.sparse_lcp;
+  const detail::LcpScope lcp_scope(&lcp);
   while (opt.guess_active_set && !held && attempts < kMaxGuesses + kGuessedRowCount) {
     if (attempts++ > 0) restore_bodies();
     tried = guess;
@@ -334,6 +336,8 @@ void RoverSim::Impl::step() {
   row_mode = next;
   ++stats.steps;
   if (ode_lcp_messages != lcp_messages) ++stats.lcp_errors;
+  stats.sparse_solves = lcp.sparse;
+  stats.dense_solves = lcp.dense;
   if (opt.guess_active_set) {
     const bool some_bounded = std::find(tried.begin(), tried.end(), kBounded) != tried.end();
     if (held && attempts == 1) ++stats.first_guess;

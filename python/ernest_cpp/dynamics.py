@@ -51,10 +51,12 @@ COMMAND_NAMES = ("w_FL", "w_FR", "w_RL", "w_RR", "yaw_rate", "roll_rate", "gimba
 
 def make_options(ground: str = "soil", soil: str | _soil.SoilParameters = "m90",
                  dt: float | None = None, seed: int = 0,
-                 friction: float | None = None, guess_active_set: bool = True) -> SimOptions:
+                 friction: float | None = None, guess_active_set: bool = True,
+                 sparse_lcp: bool = True) -> SimOptions:
     """SimOptions for ``ground`` ('soil' or 'rigid'), a soil preset name or SoilParameters, the
-    physics step (default: the study's), the seed, the Coulomb friction (None: drawn) and
-    whether the solver guesses its active set (False: ODE pivots every step; same solution)."""
+    physics step (default: the study's), the seed, the Coulomb friction (None: drawn), whether
+    the solver guesses its active set (False: ODE pivots every step; same solution) and whether
+    it solves with the sparse LDL^T (False: ODE's dense solver; same solution)."""
     o = SimOptions()
     if ground not in ("soil", "rigid"):
         raise ValueError(f"ground must be 'soil' or 'rigid', got {ground!r}")
@@ -66,6 +68,7 @@ def make_options(ground: str = "soil", soil: str | _soil.SoilParameters = "m90",
     if friction is not None:
         o.friction = float(friction)
     o.guess_active_set = bool(guess_active_set)
+    o.sparse_lcp = bool(sparse_lcp)
     o.validate()
     return o
 

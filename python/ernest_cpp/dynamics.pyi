@@ -119,6 +119,7 @@ class SimOptions:
     friction: float
     rigid_slip: float
     guess_active_set: bool
+    sparse_lcp: bool
     max_speed: float
     max_angular_speed: float
     def __init__(self) -> None: ...
@@ -130,6 +131,8 @@ class SolverStats:
     later_guess: int
     pivoted: int
     lcp_errors: int
+    sparse_solves: int
+    dense_solves: int
 
 class Commands:
     wheel_speed: list[float]
@@ -238,7 +241,8 @@ def wheel_jacobian(p: RoverParameters, psi: float, phi: float, wheel: int) -> np
 def synchronise_wheels(p: RoverParameters, psi: float, phi: float, vx: float, wx: float,
                        wy: float, psi_dot: float, phi_dot: float) -> WheelSyncResult: ...
 def make_options(ground: str = "soil", soil: str | SoilParameters = "m90", dt: float | None = None,
-                 seed: int = 0, friction: float | None = None) -> SimOptions: ...
+                 seed: int = 0, friction: float | None = None, guess_active_set: bool = True,
+                 sparse_lcp: bool = True) -> SimOptions: ...
 def rock_field(n: int = 20, seed: int = 0, length: float = 6.0, width: float = 2.0,
                x0: float = 0.8, size: tuple[float, float] = (0.06, 0.16)) -> list[BoxObstacle]: ...
 def make_sim(ground: str = "soil", terrain: HeightMap | None = None,

@@ -1,0 +1,230 @@
+// ODE's LCP entry point, bound to the sparse solver (see ode_lcp.hpp for why and when).
+#include "ernest/dynamics/ode_lcp.hpp"
+
+#include <dlfcn.h>
+#include <emmintrin.h>
+#include <ode/ode.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+struct dxWorldProcessMemArena;  // ODE's, opaque here
+
+// ODE 0.16 (src/lcp.cpp): solve A x = b + w with lo <= x <= hi and complementarity, A the n x n
+// lower triangle with row stride dPAD(n); b and x interleaved in pairsbx (b, x per row), lo and
+// hi in pairslh; findex[i] >= 0 makes row i's bounds friction bounds of row findex[i]; the first
+// nub rows are unbounded. The name must mangle exactly as ODE's (the linker matches it).
+__attribute__((visibility("default"))) void dxSolveLCP(dxWorldProcessMemArena* memarena,
+                                                       unsigned n, dReal* A, dReal* pairsbx,
+                                                       dReal* outer_w, unsigned nub,
+                                                       dReal* pairslh, int* findex);
+
+namespace ernest::dynamics::detail {
+
+namespace {
+
+static_assert(sizeof(dReal) == sizeof(double), "ODE must be built in double precision");
+using OdeSolve = void (*)(dxWorldProcessMemArena*, unsigned, dReal*, dReal*, dReal*, unsigned,
+                          dReal*, int*);
+constexpr const char* kSymbol = "_Z10dxSolveLCPP22dxWorldProcessMemArenajPdS1_S1_jS1_Pi";
+
+thread_local LcpWorkspace* current = nullptr;
+thread_local bool reached = false;  // our dxSolveLCP ran on this thread (sparse_lcp_active)
+
+// ODE's own solver: the next definition after ours, else the one in libode itself.
+OdeSolve ode_solver() {
+  static const OdeSolve fn = [] {
+    auto f = reinterpret_cast<OdeSolve>(dlsym(RTLD_NEXT, kSymbol));
+    if (f == nullptr || f == &::dxSolveLCP) {
+      void* lib = dlopen("libode.so.8", RTLD_LAZY | RTLD_NOLOAD);
+      if (lib) f = reinterpret_cast<OdeSolve>(dlsym(lib, kSymbol));
+    }
+    return f == &::dxSolveLCP ? nullptr : f;
+  }();
+  return fn;
+}
+
+// The problem as one linear system: every row unbounded, or bounded with x = 0 allowed by the
+// bound that is zero. Solved, checked and written back only if Dantzig's method would end
+// there: each bounded row's w = A_i x - b_i lies on the side its zero bound allows (ODE's
+// test, in its order; x of the other bounded rows is 0). Returns false without touching the
+// outputs otherwise.
+bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx, double* outer_w,
+                  unsigned nub, const double* pairslh, const int* findex) {
+  constexpr int kMax = LdltPlan::kMaxRows;
+  if (n > static_cast<unsigned>(kMax)) return false;  // (row masks of 64 bits)
+  std::array<unsigned, kMax> urows, brows;
+  int nu = 0, nb = 0;
+  for (unsigned i = 0; i < n; ++i) {
+    const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
+    if (i < nub || ((!findex || findex[i] < 0) && lo == -dInfinity && hi == dInfinity)) {
+      urows[nu++] = i;
+    } else {
+      if ((findex && findex[i] >= 0) || (lo != 0.0 && hi != 0.0)) return false;
+      brows[nb++] = i;
+    }
+  }
+  if (nu == 0) return false;
+  const unsigned stride = dPAD(n);
+  // Pattern of the unbounded rows' block: the non-zeros of each row of A's lower triangle, two
+  // at a time, without the bounded rows' columns.
+  std::array<LdltPlan::Mask, kMax> pattern;
+  const __m128d zero = _mm_setzero_pd();
+  for (int a = 0; a < nu; ++a) {
+    const unsigned i = urows[a];
+    const double* row = A + i * stride;
+    LdltPlan::Mask m = 0;
+    for (unsigned j = 0; j <= i; j += 2)  // row[i + 1] exists: i is odd when stride == n
+      m |= LdltPlan::Mask(_mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero))) << j;
+    if (i < 63) m &= (LdltPlan::Mask{2} << i) - 1;
+    for (int c = nb - 1; c >= 0; --c) {  // drop column brows[c], shifting the ones above it
+      const LdltPlan::Mask below = (LdltPlan::Mask{1} << brows[c]) - 1;
+      m = (m & below) | ((m >> 1) & ~below);
+    }
+    pattern[a] = m;
+  }
+  const LdltPlan& plan = ws.plan_for(pattern.data(), urows.data(), nu, static_cast<int>(stride));
+  if (!ws.ldlt.factor(plan, A)) return false;
+  std::array<double, kMax> x;
+  for (int a = 0; a < nu; ++a) x[a] = pairsbx[2 * urows[a]];
+  ws.ldlt.solve(x.data());
+  std::array<double, kMax> w;
+  for (int c = 0; c < nb; ++c) {
+    const unsigned i = brows[c];
+    double s = 0.0;
+    for (int a = 0; a < nu; ++a) {
+      const unsigned j = urows[a];
+      s += (j < i ? A[i * stride + j] : A[j * stride + i]) * x[a];
+    }
+    s -= pairsbx[2 * i];
+    const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
+    if (!((lo == 0.0 && s >= 0.0) || (hi == 0.0 && s <= 0.0) || s == 0.0)) return false;
+    w[c] = s;
+  }
+  for (int a = 0; a < nu; ++a) {
+    if (!std::isfinite(x[a])) return false;
+  }
+  for (int a = 0; a < nu; ++a) pairsbx[2 * urows[a] + 1] = x[a];
+  for (int c = 0; c < nb; ++c) pairsbx[2 * brows[c] + 1] = 0.0;
+  if (outer_w) {
+    for (int a = 0; a < nu; ++a) outer_w[urows[a]] = 0.0;
+    for (int c = 0; c < nb; ++c) outer_w[brows[c]] = w[c];
+  }
+  return true;
+}
+
+}  // namespace
+
+const LdltPlan& LcpWorkspace::plan_for(const LdltPlan::Mask* pattern, const unsigned* rows, int n,
+                                       int stride) {
+  for (LdltPlan& p : plans) {
+    if (!p.same_rows(rows, n, stride)) continue;
+    if (!p.covers(pattern)) {  // grow its pattern
+      std::array<LdltPlan::Mask, LdltPlan::kMaxRows> u;
+      for (int i = 0; i < n; ++i) u[i] = p.pattern()[i] | pattern[i];
+      p.analyse(u.data(), rows, n, stride);
+      ++analyses;
+    }
+    return p;
+  }
+  LdltPlan& p = plans[next_plan];
+  next_plan = (next_plan + 1) % kPlans;
+  p.analyse(pattern, rows, n, stride);
+  ++analyses;
+  return p;
+}
+
+void LcpWorkspace::clear() {
+  plans = {};
+  next_plan = 0;
+}
+
+// Layout: next_plan, then per plan n (0: unused), stride, rows[n], pattern[n].
+void LcpWorkspace::save(std::vector<std::uint64_t>& out) const {
+  out.clear();
+  out.push_back(static_cast<std::uint64_t>(next_plan));
+  for (const LdltPlan& p : plans) {
+    out.push_back(static_cast<std::uint64_t>(p.size()));
+    if (p.size() == 0) continue;
+    out.push_back(static_cast<std::uint64_t>(p.stride()));
+    for (int i = 0; i < p.size(); ++i) out.push_back(p.rows()[i]);
+    for (int i = 0; i < p.size(); ++i) out.push_back(p.pattern()[i]);
+  }
+}
+
+void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
+  const auto bad = [] {
+    throw std::invalid_argument("Snapshot: corrupt constraint-solver data (not from snapshot())");
+  };
+  clear();
+  if (in.empty()) return;  // a snapshot from before any step
+  std::size_t k = 0;
+  const auto next = [&] {
+    if (k >= in.size()) bad();
+    return in[k++];
+  };
+  const std::uint64_t np = next();
+  if (np >= kPlans) bad();
+  for (LdltPlan& p : plans) {
+    const std::uint64_t n = next();
+    if (n == 0) continue;
+    if (n > LdltPlan::kMaxRows) bad();
+    const std::uint64_t stride = next();
+    std::array<unsigned, LdltPlan::kMaxRows> rows;
+    std::array<LdltPlan::Mask, LdltPlan::kMaxRows> pattern;
+    for (std::uint64_t i = 0; i < n; ++i) {
+      rows[i] = static_cast<unsigned>(next());
+      if (rows[i] >= stride || (i > 0 && rows[i] <= rows[i - 1])) bad();
+    }
+    for (std::uint64_t i = 0; i < n; ++i) {
+      pattern[i] = next();
+      if ((pattern[i] >> i) != 1) bad();  // lower triangle with its diagonal
+    }
+    if (stride > 4 * LdltPlan::kMaxRows) bad();
+    p.analyse(pattern.data(), rows.data(), static_cast<int>(n), static_cast<int>(stride));
+  }
+  if (k != in.size()) bad();
+  next_plan = static_cast<int>(np);
+}
+
+LcpScope::LcpScope(LcpWorkspace* ws) { current = ws; }
+LcpScope::~LcpScope() { current = nullptr; }
+
+bool sparse_lcp_active() {
+  static const bool active = [] {
+    // One body on a ball joint to the world: three unbounded rows.
+    dWorldID w = dWorldCreate();
+    dBodyID b = dBodyCreate(w);
+    dJointID j = dJointCreateBall(w, nullptr);
+    dJointAttach(j, b, nullptr);
+    dJointSetBallAnchor(j, 0.0, 0.0, 1.0);
+    reached = false;
+    dWorldStep(w, 0.01);
+    dWorldDestroy(w);
+    if (reached && ode_solver() == nullptr)  // ODE would get no solver at all: refuse to run
+      throw std::runtime_error("ODE's dxSolveLCP (" + std::string(kSymbol) + ") not found");
+    return reached;
+  }();
+  return active;
+}
+
+}  // namespace ernest::dynamics::detail
+
+void dxSolveLCP(dxWorldProcessMemArena* memarena, unsigned n, dReal* A, dReal* pairsbx,
+                dReal* outer_w, unsigned nub, dReal* pairslh, int* findex) {
+  using namespace ernest::dynamics::detail;
+  reached = true;
+  LcpWorkspace* ws = current;
+  if (ws && ws->enabled && solve_sparse(*ws, n, A, pairsbx, outer_w, nub, pairslh, findex)) {
+    ++ws->sparse;
+    return;
+  }
+  if (ws) ++ws->dense;
+  const OdeSolve ode = ode_solver();
+  if (ode) {
+    ode(memarena, n, A, pairsbx, outer_w, nub, pairslh, findex);
+  } else {  // unreachable: sparse_lcp_active() refuses to run without it
+    for (unsigned i = 0; i < n; ++i) pairsbx[2 * i + 1] = 0.0;
+  }
+}

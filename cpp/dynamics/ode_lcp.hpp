@@ -1,0 +1,62 @@
+// The constraint solve of dWorldStep through a sparse LDLᵀ (internal to cpp/dynamics).
+//
+// dWorldStep hands ODE's Dantzig LCP solver the dense matrix A = J M⁻¹ Jᵀ of all rows. With the
+// guessed active set (rover_step.cpp) almost every row is unbounded and the rest rest at a bound
+// of zero (contacts' slack normal rows), so the LCP is one linear system plus a check per bounded
+// row; ODE still factorises A densely, permuting rows one at a time. ode_lcp.cpp defines ODE's
+// (exported, called through the PLT) dxSolveLCP, so that the dynamic linker binds ODE's call to
+// it: while a LcpScope is alive on the thread, such problems are solved with SparseLdlt and
+// checked exactly as Dantzig's method would (each bounded row at x = 0 with w on its side);
+// anything else (friction with findex, a bounded row off its zero bound, a failed check, more
+// than 64 rows, no scope) goes to ODE's own solver, found with dlsym.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "ernest/dynamics/sparse_ldlt.hpp"
+
+namespace ernest::dynamics::detail {
+
+/// Working data of one simulation's constraint solves, and what they did.
+///
+/// Plans are remembered per set of rows. The numeric pattern of A flickers as the rover moves
+/// through symmetric poses (an entry between two rows on one body is exactly zero in some
+/// configurations), so a plan is analysed from the union of the patterns its rows have shown and
+/// kept while every new pattern lies within its factor. Plans therefore depend on the history:
+/// save() and load() carry them through Snapshot, and clear() starts a run afresh (reset), so
+/// that repeats stay bit-exact.
+struct LcpWorkspace {
+  bool enabled = true;  // false: count the solves, hand all of them to ODE
+  static constexpr int kPlans = 3;  // sets of rows remembered (a wheel leaving the ground and back)
+  std::array<LdltPlan, kPlans> plans{};
+  int next_plan = 0;
+  SparseLdlt ldlt;
+  std::uint64_t sparse = 0;    // solves done here
+  std::uint64_t dense = 0;     // solves handed to ODE's Dantzig solver
+  std::uint64_t analyses = 0;  // symbolic analyses
+
+  /// The plan for these rows and this pattern: a remembered one that covers it, or a new one.
+  const LdltPlan& plan_for(const LdltPlan::Mask* pattern, const unsigned* rows, int n,
+                           int stride);
+  void clear();
+  void save(std::vector<std::uint64_t>& out) const;
+  /// Inverse of save(); throws std::invalid_argument on data that save() cannot have written.
+  void load(const std::vector<std::uint64_t>& in);
+};
+
+/// While alive, dWorldStep calls on this thread solve through `ws` (not nested).
+class LcpScope {
+ public:
+  explicit LcpScope(LcpWorkspace* ws);
+  ~LcpScope();
+  LcpScope(const LcpScope&) = delete;
+  LcpScope& operator=(const LcpScope&) = delete;
+};
+
+/// Whether ODE's calls reach ode_lcp.cpp's solver in this process (the symbol interposition
+/// worked). Steps one tiny world once, on first use.
+bool sparse_lcp_active();
+
+}  // namespace ernest::dynamics::detail

@@ -1,0 +1,200 @@
+// Sparse LDLᵀ (sparse_ldlt.hpp): minimum-degree order on bit masks, right-looking elimination of
+// the sparse columns, ODE's dense LDLᵀ for the trailing clique.
+#include "ernest/dynamics/sparse_ldlt.hpp"
+
+#include <ode/ode.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ernest::dynamics {
+
+namespace {
+using Mask = LdltPlan::Mask;
+inline Mask bit(int i) { return Mask{1} << i; }
+inline int pop(Mask m) { return __builtin_popcountll(m); }
+inline int low(Mask m) { return __builtin_ctzll(m); }
+}  // namespace
+
+bool LdltPlan::same_rows(const unsigned* rows, int n, int stride) const {
+  if (n != n_ || stride != stride_) return false;
+  for (int i = 0; i < n; ++i)
+    if (rows[i] != rows_[i]) return false;
+  return true;
+}
+
+bool LdltPlan::covers(const Mask* pattern) const {
+  Mask outside = 0;
+  for (int i = 0; i < n_; ++i) outside |= pattern[i] & ~filled_[i];
+  return outside == 0;
+}
+
+void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int stride) {
+  n_ = n;
+  stride_ = stride;
+  w_stride_ = (n + 3) & ~3;
+  for (int i = 0; i < n; ++i) {
+    pattern_[i] = pattern[i];
+    rows_[i] = rows[i];
+  }
+  // Symmetric adjacency without the diagonal.
+  std::array<Mask, kMaxRows> adj{};
+  for (int i = 0; i < n; ++i) {
+    Mask m = pattern[i] & ~bit(i);
+    while (m) {
+      const int j = low(m);
+      m &= m - 1;
+      adj[i] |= bit(j);
+      adj[j] |= bit(i);
+    }
+  }
+  // Minimum degree (ties: lowest row), eliminating on the masks; each eliminated row's live
+  // neighbours are its column of L. Once the live rows form a clique they are the dense tail.
+  std::array<Mask, kMaxRows> column{};  // L's column pattern, row numbering
+  Mask alive = n == kMaxRows ? ~Mask{0} : bit(n) - 1;
+  int k = 0;
+  for (; k < n; ++k) {
+    int best = -1, best_degree = kMaxRows;
+    for (Mask m = alive; m; m &= m - 1) {
+      const int v = low(m);
+      const int d = pop(adj[v] & alive);
+      if (d < best_degree) best_degree = d, best = v;
+    }
+    if (best_degree == pop(alive) - 1) break;  // every live row is adjacent to every other
+    const Mask nb = adj[best] & alive;
+    for (Mask m = nb; m; m &= m - 1) adj[low(m)] |= nb & ~bit(low(m));
+    column[k] = nb;
+    perm_[k] = static_cast<std::uint8_t>(best);
+    alive &= ~bit(best);
+  }
+  dense_from_ = k;
+  for (Mask m = alive; m; m &= m - 1) perm_[k++] = static_cast<std::uint8_t>(low(m));
+  std::array<int, kMaxRows> pos{};
+  for (int p = 0; p < n; ++p) pos[perm_[p]] = p;
+  for (int i = 0; i < n; ++i) filled_[i] = bit(i);
+  const auto fill = [&](int i, int j) { filled_[std::max(i, j)] |= bit(std::min(i, j)); };
+  for (int c = 0; c < dense_from_; ++c)
+    for (Mask m = column[c]; m; m &= m - 1) fill(perm_[c], low(m));
+  for (int r = dense_from_; r < n; ++r)
+    for (int c = dense_from_; c < r; ++c) fill(perm_[r], perm_[c]);
+
+  // Sparse columns as position lists (ascending) and runs; the entries of L's pattern to copy.
+  int nr = 0, nruns = 0;
+  n_copies_ = 0;
+  const auto copy = [&](int r, int c) {  // positions r >= c
+    const unsigned i = rows_[perm_[r]], j = rows_[perm_[c]];
+    const std::uint32_t src = i >= j ? i * stride + j : j * stride + i;
+    const auto dst = static_cast<std::uint16_t>(r * w_stride_ + c);
+    if (n_copies_ > 0) {
+      Copy& last = copies_[n_copies_ - 1];
+      if (last.dst + last.count == dst && last.src + last.count == src) {
+        ++last.count;
+        return;
+      }
+    }
+    copies_[n_copies_++] = Copy{src, dst, 1};
+  };
+  for (int c = 0; c < dense_from_; ++c) {
+    col_start_[c] = static_cast<std::uint16_t>(nr);
+    run_start_[c] = static_cast<std::uint16_t>(nruns);
+    Mask below = 0;  // positions
+    for (Mask m = column[c]; m; m &= m - 1) below |= bit(pos[low(m)]);
+    copy(c, c);
+    for (Mask m = below; m; m &= m - 1) {
+      const int r = low(m);
+      col_rows_[nr++] = static_cast<std::uint8_t>(r);
+      if (nruns > run_start_[c] && runs_[nruns - 1].first + runs_[nruns - 1].count == r)
+        ++runs_[nruns - 1].count;
+      else
+        runs_[nruns++] = Run{static_cast<std::uint8_t>(r), 1};
+    }
+  }
+  col_start_[dense_from_] = static_cast<std::uint16_t>(nr);
+  run_start_[dense_from_] = static_cast<std::uint16_t>(nruns);
+  // Copies row by row (runs along a row of both matrices), the sparse part then the tail.
+  for (int r = 0; r < n; ++r) {
+    for (int c = 0; c < std::min(r, dense_from_); ++c) {
+      bool in = false;
+      for (int q = col_start_[c]; q < col_start_[c + 1] && !in; ++q) in = col_rows_[q] == r;
+      if (in) copy(r, c);
+    }
+    if (r < dense_from_) copy(r, r);
+    for (int c = dense_from_; c <= r; ++c) copy(r, c);
+  }
+}
+
+bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
+  plan_ = &plan;
+  double* w = w_.data();
+  const int s = plan.w_stride_, n = plan.n_, df = plan.dense_from_;
+  for (int g = 0; g < plan.n_copies_; ++g) {
+    const LdltPlan::Copy& c = plan.copies_[g];
+    for (int e = 0; e < c.count; ++e) w[c.dst + e] = a[c.src + e];
+  }
+  // Right-looking: column k (pivot d_k) updates the rows and columns of its pattern only, run by
+  // run; u holds column k by position.
+  alignas(16) double u[LdltPlan::kMaxRows];
+  for (int k = 0; k < df; ++k) {
+    const double d = w[k * s + k];
+    if (!(d > 0.0) || !std::isfinite(d)) return false;
+    const double inv = 1.0 / d;
+    dinv_[k] = inv;
+    const int q0 = plan.col_start_[k], q1 = plan.col_start_[k + 1];
+    const LdltPlan::Run* runs = plan.runs_.data() + plan.run_start_[k];
+    const int nruns = plan.run_start_[k + 1] - plan.run_start_[k];
+    for (int q = q0; q < q1; ++q) u[plan.col_rows_[q]] = w[plan.col_rows_[q] * s + k];
+    for (int q = q0; q < q1; ++q) {
+      const int r = plan.col_rows_[q];
+      double* wr = w + r * s;
+      const double l = u[r] * inv;
+      for (int g = 0; g < nruns && runs[g].first <= r; ++g) {
+        const int end = std::min(runs[g].first + runs[g].count, r + 1);
+        for (int j = runs[g].first; j < end; ++j) wr[j] -= l * u[j];
+      }
+      wr[k] = l;
+      lcol_[q] = l;
+    }
+  }
+  if (df < n) {
+    dFactorLDLT(w + df * s + df, dinv_.data() + df, n - df, s);
+    for (int k = df; k < n; ++k)
+      if (!(dinv_[k] > 0.0) || !std::isfinite(dinv_[k])) return false;
+  }
+  return true;
+}
+
+void SparseLdlt::solve(double* x) const {
+  const LdltPlan& plan = *plan_;
+  const double* w = w_.data();
+  const double* lc = lcol_.data();
+  const std::uint8_t* cr = plan.col_rows_.data();
+  const int s = plan.w_stride_, n = plan.n_, df = plan.dense_from_;
+  double* y = y_.data();
+  for (int p = 0; p < n; ++p) y[p] = x[plan.perm_[p]];
+  // L z = x: sparse columns, then the dense tail by rows.
+  for (int k = 0; k < df; ++k) {
+    const double yk = y[k];
+    for (int q = plan.col_start_[k]; q < plan.col_start_[k + 1]; ++q) y[cr[q]] -= lc[q] * yk;
+  }
+  for (int i = df + 1; i < n; ++i) {
+    const double* wi = w + i * s;
+    double t = y[i];
+    for (int k = df; k < i; ++k) t -= wi[k] * y[k];
+    y[i] = t;
+  }
+  for (int k = 0; k < n; ++k) y[k] *= dinv_[k];
+  // Lᵀ x = z: the dense tail by rows (bottom up), then the sparse columns.
+  for (int i = n - 1; i > df; --i) {
+    const double* wi = w + i * s;
+    const double yi = y[i];
+    for (int k = df; k < i; ++k) y[k] -= wi[k] * yi;
+  }
+  for (int k = df - 1; k >= 0; --k) {
+    double t = y[k];
+    for (int q = plan.col_start_[k]; q < plan.col_start_[k + 1]; ++q) t -= lc[q] * y[cr[q]];
+    y[k] = t;
+  }
+  for (int p = 0; p < n; ++p) x[plan.perm_[p]] = y[p];
+}
+
+}  // namespace ernest::dynamics

@@ -1,0 +1,79 @@
+// Sparse LDLᵀ for the constraint systems of one rigid-body step (up to 64 rows). ODE factorises
+// J M⁻¹ Jᵀ densely; for a tree of bodies most of it is zero (rows couple only through a shared
+// body), and in a minimum-degree order the factor stays sparse up to a small dense tail.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+namespace ernest::dynamics {
+
+/// Symbolic analysis of one sparsity pattern: minimum-degree order, the pattern of the factor,
+/// and the trailing clique that is factorised densely. A pure function of the pattern: the
+/// rounding of a factorisation depends on the plan, so a caller wanting bit-exact repeats must
+/// choose plans reproducibly (ode_lcp.hpp keeps their patterns in the snapshot).
+class LdltPlan {
+ public:
+  static constexpr int kMaxRows = 64;
+  using Mask = std::uint64_t;
+
+  /// Rows of the system: A(i, j) = a[rows[i] * stride + rows[j]] for i >= j (lower triangle of
+  /// a larger matrix, ODE's layout); pattern[i] has bit j set where that entry is non-zero
+  /// (j <= i, diagonal included). 1 <= n <= kMaxRows, rows ascending.
+  void analyse(const Mask* pattern, const unsigned* rows, int n, int stride);
+  /// Whether this plan was made for these rows and stride.
+  bool same_rows(const unsigned* rows, int n, int stride) const;
+  /// Whether a matrix with this pattern (same rows) can be factorised with this plan: every
+  /// non-zero lies in the pattern of the factor.
+  bool covers(const Mask* pattern) const;
+  int size() const { return n_; }
+  int stride() const { return stride_; }
+  const unsigned* rows() const { return rows_.data(); }
+  /// The pattern the plan was analysed from.
+  const Mask* pattern() const { return pattern_.data(); }
+  /// Columns [dense_from(), size()) are one clique, factorised densely.
+  int dense_from() const { return dense_from_; }
+
+ private:
+  friend class SparseLdlt;
+  int n_ = 0, stride_ = 0, dense_from_ = 0, w_stride_ = 0;
+  std::array<Mask, kMaxRows> pattern_{};
+  std::array<Mask, kMaxRows> filled_{};  // pattern of L + D (lower), row numbering
+  std::array<unsigned, kMaxRows> rows_{};
+  std::array<std::uint8_t, kMaxRows> perm_{};  // position k of the order holds row perm_[k]
+  // Below-diagonal rows (positions) of each sparse column k < dense_from_, ascending, and the
+  // same as runs of consecutive positions (the inner loops run over contiguous memory).
+  struct Run {
+    std::uint8_t first, count;
+  };
+  std::array<std::uint16_t, kMaxRows + 1> col_start_{}, run_start_{};
+  std::array<std::uint8_t, kMaxRows * kMaxRows / 2> col_rows_{};
+  std::array<Run, kMaxRows * kMaxRows / 2> runs_{};
+  // The entries of the factor's pattern, copied from A into the working matrix in runs that are
+  // consecutive in both.
+  struct Copy {
+    std::uint32_t src;
+    std::uint16_t dst, count;
+  };
+  int n_copies_ = 0;
+  std::array<Copy, kMaxRows * (kMaxRows + 1) / 2> copies_{};
+};
+
+/// Numeric factorisation with a plan; working data preallocated (never allocates).
+class SparseLdlt {
+ public:
+  /// Factorises A (see LdltPlan::analyse) in the plan's order. Returns false if a pivot is not
+  /// positive and finite (A not positive definite): nothing usable is left then.
+  bool factor(const LdltPlan& plan, const double* a);
+  /// x := A⁻¹ x, x in the numbering of the plan's rows (x[i] belongs to rows[i]).
+  void solve(double* x) const;
+
+ private:
+  const LdltPlan* plan_ = nullptr;
+  alignas(64) std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> w_{};  // L, row-major
+  std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows / 2> lcol_{};  // sparse columns of L
+  std::array<double, LdltPlan::kMaxRows> dinv_{};  // 1 / D
+  mutable std::array<double, LdltPlan::kMaxRows> y_{};
+};
+
+}  // namespace ernest::dynamics
