@@ -165,14 +165,20 @@ def test_slope_demo_metrics_follow_table6_definitions(tmp_path):
         slope_demo.run("rl")
 
 
-def test_active_set_guessing_is_exposed_and_agrees_with_pivoting():
-    # Same start, same commands: the guessed and the pivoted solver agree over a short soil run
-    # (the C++ tests compare them step by step over longer, harsher runs).
-    sims = [D.make_sim("soil", guess_active_set=g) for g in (True, False)]
+def _same_run_with_option_on_and_off(option: str):
+    """Two soil sims, the solver option on and off, driven alike for 40 steps."""
+    sims = [D.make_sim("soil", **{option: on}) for on in (True, False)]
     for sim in sims:
         sim.reset(0.0, 0.0, 0.0, speed=0.15)
         sim.set_commands(D.sync_commands(sim, 0.15, yaw_rate=0.1))
         sim.step_n(40)
+    return sims
+
+
+def test_active_set_guessing_is_exposed_and_agrees_with_pivoting():
+    # Same start, same commands: the guessed and the pivoted solver agree over a short soil run
+    # (the C++ tests compare them step by step over longer, harsher runs).
+    sims = _same_run_with_option_on_and_off("guess_active_set")
     a, b = (sim.state for sim in sims)
     np.testing.assert_allclose(a.position, b.position, atol=1e-6)
     np.testing.assert_allclose(a.wheel_load, b.wheel_load, rtol=1e-4)
@@ -186,11 +192,7 @@ def test_active_set_guessing_is_exposed_and_agrees_with_pivoting():
 def test_sparse_constraint_solver_runs_inside_the_module_and_agrees_with_ode():
     # The sparse solver reaches ODE by symbol interposition; inside the Python extension module
     # (loaded with RTLD_LOCAL) it must still be the one ODE calls.
-    sims = [D.make_sim("soil", sparse_lcp=s) for s in (True, False)]
-    for sim in sims:
-        sim.reset(0.0, 0.0, 0.0, speed=0.15)
-        sim.set_commands(D.sync_commands(sim, 0.15, yaw_rate=0.1))
-        sim.step_n(40)
+    sims = _same_run_with_option_on_and_off("sparse_lcp")
     a, b = (sim.state for sim in sims)
     np.testing.assert_allclose(a.position, b.position, atol=1e-9)
     np.testing.assert_allclose(a.wheel_load, b.wheel_load, rtol=1e-7)
