@@ -67,37 +67,56 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
   }
   if (nu == 0) return false;
   const unsigned stride = dPAD(n);
-  // Pattern of the unbounded rows' block: the non-zeros of each row of A's lower triangle, two
-  // at a time, without the bounded rows' columns.
-  std::array<LdltPlan::Mask, kMax> pattern;
-  const __m128d zero = _mm_setzero_pd();
-  for (int a = 0; a < nu; ++a) {
-    const unsigned i = urows[a];
-    const double* row = A + i * stride;
-    LdltPlan::Mask m = 0;
-    for (unsigned j = 0; j <= i; j += 2)  // row[i + 1] exists: i is odd when stride == n
-      m |= LdltPlan::Mask(_mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero))) << j;
-    if (i < 63) m &= (LdltPlan::Mask{2} << i) - 1;
-    for (int c = nb - 1; c >= 0; --c) {  // drop column brows[c], shifting the ones above it
-      const LdltPlan::Mask below = (LdltPlan::Mask{1} << brows[c]) - 1;
-      m = (m & below) | ((m >> 1) & ~below);
+  // A remembered plan for these rows serves if A has no non-zero outside its factor; otherwise
+  // A's pattern (the non-zeros of each row's lower triangle, two at a time, without the bounded
+  // rows' columns) makes or grows one.
+  LdltPlan* known = ws.find(urows.data(), nu, static_cast<int>(stride));
+  const LdltPlan* plan = known;
+  if (!known || !known->covers(A)) {
+    std::array<LdltPlan::Mask, kMax> pattern;
+    const __m128d zero = _mm_setzero_pd();
+    for (int a = 0; a < nu; ++a) {
+      const unsigned i = urows[a];
+      const double* row = A + i * stride;
+      LdltPlan::Mask m = 0;
+      for (unsigned j = 0; j <= i; j += 2)  // row[i + 1] exists: i is odd when stride == n
+        m |= LdltPlan::Mask(_mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero))) << j;
+      if (i < 63) m &= (LdltPlan::Mask{2} << i) - 1;
+      for (int c = nb - 1; c >= 0; --c) {  // drop column brows[c], shifting the ones above it
+        const LdltPlan::Mask below = (LdltPlan::Mask{1} << brows[c]) - 1;
+        m = (m & below) | ((m >> 1) & ~below);
+      }
+      pattern[a] = m;
     }
-    pattern[a] = m;
+    plan = &ws.adopt(known, pattern.data(), urows.data(), nu, static_cast<int>(stride));
   }
-  const LdltPlan& plan = ws.plan_for(pattern.data(), urows.data(), nu, static_cast<int>(stride));
-  if (!ws.ldlt.factor(plan, A)) return false;
+  if (!ws.ldlt.factor(*plan, A)) return false;
   std::array<double, kMax> x;
   for (int a = 0; a < nu; ++a) x[a] = pairsbx[2 * urows[a]];
   ws.ldlt.solve(x.data());
   std::array<double, kMax> w;
   for (int c = 0; c < nb; ++c) {
+    // w_i = A_i x - b_i: A's row i left of the diagonal, its column i below (lower triangle),
+    // in two interleaved sums each (a single one waits an add latency per term).
     const unsigned i = brows[c];
-    double s = 0.0;
-    for (int a = 0; a < nu; ++a) {
-      const unsigned j = urows[a];
-      s += (j < i ? A[i * stride + j] : A[j * stride + i]) * x[a];
+    const int split = static_cast<int>(i) - c;  // unbounded rows before i (brows ascending)
+    const double* row = A + i * stride;
+    double s0 = 0.0, s1 = 0.0;
+    int a = 0;
+    for (; a + 1 < split; a += 2) {
+      s0 += row[urows[a]] * x[a];
+      s1 += row[urows[a + 1]] * x[a + 1];
     }
-    s -= pairsbx[2 * i];
+    if (a < split) {
+      s0 += row[urows[a]] * x[a];
+      ++a;
+    }
+    for (; a + 1 < nu; a += 2) {
+      s0 += A[urows[a] * stride + i] * x[a];
+      s1 += A[urows[a + 1] * stride + i] * x[a + 1];
+    }
+    if (a < nu) s0 += A[urows[a] * stride + i] * x[a];
+    const double s = (s0 + s1) - pairsbx[2 * i];
     const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
     if (!((lo == 0.0 && s >= 0.0) || (hi == 0.0 && s <= 0.0) || s == 0.0)) return false;
     w[c] = s;
@@ -116,22 +135,24 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
 
 }  // namespace
 
-const LdltPlan& LcpWorkspace::plan_for(const LdltPlan::Mask* pattern, const unsigned* rows, int n,
-                                       int stride) {
-  for (LdltPlan& p : plans) {
-    if (!p.same_rows(rows, n, stride)) continue;
-    if (!p.covers(pattern)) {  // grow its pattern
-      std::array<LdltPlan::Mask, LdltPlan::kMaxRows> u;
-      for (int i = 0; i < n; ++i) u[i] = p.pattern()[i] | pattern[i];
-      p.analyse(u.data(), rows, n, stride);
-      ++analyses;
-    }
-    return p;
+LdltPlan* LcpWorkspace::find(const unsigned* rows, int n, int stride) {
+  for (LdltPlan& p : plans)
+    if (p.same_rows(rows, n, stride)) return &p;
+  return nullptr;
+}
+
+const LdltPlan& LcpWorkspace::adopt(LdltPlan* remembered, const LdltPlan::Mask* pattern,
+                                    const unsigned* rows, int n, int stride) {
+  ++analyses;
+  if (remembered) {  // grow its pattern
+    std::array<LdltPlan::Mask, LdltPlan::kMaxRows> u;
+    for (int i = 0; i < n; ++i) u[i] = remembered->pattern()[i] | pattern[i];
+    remembered->analyse(u.data(), rows, n, stride);
+    return *remembered;
   }
   LdltPlan& p = plans[next_plan];
   next_plan = (next_plan + 1) % kPlans;
   p.analyse(pattern, rows, n, stride);
-  ++analyses;
   return p;
 }
 

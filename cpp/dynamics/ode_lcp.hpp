@@ -37,9 +37,11 @@ struct LcpWorkspace {
   std::uint64_t dense = 0;     // solves handed to ODE's Dantzig solver
   std::uint64_t analyses = 0;  // symbolic analyses
 
-  /// The plan for these rows and this pattern: a remembered one that covers it, or a new one.
-  const LdltPlan& plan_for(const LdltPlan::Mask* pattern, const unsigned* rows, int n,
-                           int stride);
+  /// The remembered plan for these rows, or nullptr.
+  LdltPlan* find(const unsigned* rows, int n, int stride);
+  /// A plan covering this pattern: `remembered` (find()'s answer) grown by it, or a new one.
+  const LdltPlan& adopt(LdltPlan* remembered, const LdltPlan::Mask* pattern,
+                        const unsigned* rows, int n, int stride);
   void clear();
   void save(std::vector<std::uint64_t>& out) const;
   /// Inverse of save(); throws std::invalid_argument on data that save() cannot have written.

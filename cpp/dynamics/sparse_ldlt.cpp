@@ -2,6 +2,7 @@
 // the sparse columns, ODE's dense LDLᵀ for the trailing clique.
 #include "ernest/dynamics/sparse_ldlt.hpp"
 
+#include <emmintrin.h>
 #include <ode/ode.h>
 
 #include <algorithm>
@@ -14,6 +15,8 @@ using Mask = LdltPlan::Mask;
 inline Mask bit(int i) { return Mask{1} << i; }
 inline int pop(Mask m) { return __builtin_popcountll(m); }
 inline int low(Mask m) { return __builtin_ctzll(m); }
+// Supernodes at least this wide are factorised with dense kernels (factor_supernode).
+constexpr int kDenseSupernode = 4;
 }  // namespace
 
 bool LdltPlan::same_rows(const unsigned* rows, int n, int stride) const {
@@ -21,6 +24,20 @@ bool LdltPlan::same_rows(const unsigned* rows, int n, int stride) const {
   for (int i = 0; i < n; ++i)
     if (rows[i] != rows_[i]) return false;
   return true;
+}
+
+bool LdltPlan::covers(const double* a) const {
+  const __m128d zero = _mm_setzero_pd();
+  __m128d nonzero = zero;
+  for (int g = 0; g < n_zeros_; ++g) {
+    const double* p = a + zeros_[g].src;
+    const int count = static_cast<int>(zeros_[g].count);
+    int e = 0;
+    for (; e + 2 <= count; e += 2)
+      nonzero = _mm_or_pd(nonzero, _mm_cmpneq_pd(_mm_loadu_pd(p + e), zero));
+    if (e < count) nonzero = _mm_or_pd(nonzero, _mm_cmpneq_sd(_mm_load_sd(p + e), zero));
+  }
+  return _mm_movemask_pd(nonzero) == 0;
 }
 
 bool LdltPlan::covers(const Mask* pattern) const {
@@ -110,7 +127,33 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     }
   }
   col_start_[dense_from_] = static_cast<std::uint16_t>(nr);
+  n_supers_ = 0;
+  for (int c = 0; c < dense_from_;) {
+    int w = 1;
+    while (c + w < dense_from_) {  // does column c + w - 1 nest onto column c + w?
+      const int a = c + w - 1, b = c + w;
+      const int na = col_start_[a + 1] - col_start_[a], nb = col_start_[b + 1] - col_start_[b];
+      if (na != nb + 1 || col_rows_[col_start_[a]] != b ||
+          !std::equal(col_rows_.begin() + col_start_[a] + 1, col_rows_.begin() + col_start_[a + 1],
+                      col_rows_.begin() + col_start_[b]))
+        break;
+      ++w;
+    }
+    supers_[n_supers_++] = Supernode{static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(w)};
+    c += w;
+  }
   run_start_[dense_from_] = static_cast<std::uint16_t>(nruns);
+  n_zeros_ = 0;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j <= i; ++j) {
+      if (filled_[i] & bit(j)) continue;
+      const std::uint32_t src = rows_[i] * stride + rows_[j];
+      if (n_zeros_ > 0 && zeros_[n_zeros_ - 1].src + zeros_[n_zeros_ - 1].count == src)
+        ++zeros_[n_zeros_ - 1].count;
+      else
+        zeros_[n_zeros_++] = Zeros{src, 1};
+    }
+  }
   // Copies row by row (runs along a row of both matrices), the sparse part then the tail.
   for (int r = 0; r < n; ++r) {
     for (int c = 0; c < std::min(r, dense_from_); ++c) {
@@ -123,6 +166,95 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
   }
 }
 
+namespace {
+// Sum of the products of n pairs in four interleaved partial sums: a single running sum would
+// wait a full add latency per term (the fixed order keeps results bit-repeatable).
+template <class Term>
+inline double sum4(int n, Term term) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    s0 += term(i);
+    s1 += term(i + 1);
+    s2 += term(i + 2);
+    s3 += term(i + 3);
+  }
+  for (; i < n; ++i) s0 += term(i);
+  return (s0 + s1) + (s2 + s3);
+}
+}  // namespace
+
+// Column k alone (pivot d_k): updates the rows and columns of its pattern only, run by run (u
+// holds column k by position), right-looking.
+bool SparseLdlt::factor_column(int k) {
+  const LdltPlan& plan = *plan_;
+  double* w = w_.data();
+  const int s = plan.w_stride_;
+  alignas(16) double u[LdltPlan::kMaxRows];
+  const double d = w[k * s + k];
+  if (!(d > 0.0) || !std::isfinite(d)) return false;
+  const double inv = 1.0 / d;
+  dinv_[k] = inv;
+  const int q0 = plan.col_start_[k], q1 = plan.col_start_[k + 1];
+  const LdltPlan::Run* runs = plan.runs_.data() + plan.run_start_[k];
+  const int nruns = plan.run_start_[k + 1] - plan.run_start_[k];
+  for (int q = q0; q < q1; ++q) u[plan.col_rows_[q]] = w[plan.col_rows_[q] * s + k];
+  for (int q = q0; q < q1; ++q) {
+    const int r = plan.col_rows_[q];
+    double* wr = w + r * s;
+    const double l = u[r] * inv;
+    const __m128d lv = _mm_set1_pd(l);
+    for (int g = 0; g < nruns && runs[g].first <= r; ++g) {
+      const int end = std::min(runs[g].first + runs[g].count, r + 1);
+      int j = runs[g].first;
+      for (; j + 2 <= end; j += 2)  // (as the scalar form: a product, then a difference)
+        _mm_storeu_pd(wr + j, _mm_sub_pd(_mm_loadu_pd(wr + j), _mm_mul_pd(lv, _mm_loadu_pd(u + j))));
+      if (j < end) wr[j] -= l * u[j];
+    }
+    wr[k] = l;
+    lcol_[q] = l;
+  }
+  return true;
+}
+
+// Columns k0 .. k0 + width - 1 whose patterns nest share the rows R below them: their diagonal
+// block is factorised densely (ODE's dFactorLDLT), each row of R solved against it (dSolveL1:
+// d_c L_rc), and R x R updated once, entry by entry with dot products over the block's columns.
+bool SparseLdlt::factor_supernode(int k0, int width) {
+  const LdltPlan& plan = *plan_;
+  double* w = w_.data();
+  const int s = plan.w_stride_, k1 = k0 + width - 1;
+  constexpr int ke = LdltPlan::kMaxRows;
+  double* block = w + k0 * s + k0;
+  dFactorLDLT(block, dinv_.data() + k0, width, s);
+  for (int c = k0; c <= k1; ++c)
+    if (!(dinv_[c] > 0.0) || !std::isfinite(dinv_[c])) return false;
+  const std::uint8_t* below = plan.col_rows_.data() + plan.col_start_[k1];
+  const int m = plan.col_start_[k1 + 1] - plan.col_start_[k1];
+  double* e = e_.data();
+  for (int a = 0; a < m; ++a) {
+    double* seg = w + below[a] * s + k0;
+    dSolveL1(block, seg, width, s);
+    double* ea = e + a * ke;
+    for (int c = 0; c < width; ++c) {
+      ea[c] = seg[c];
+      seg[c] *= dinv_[k0 + c];
+    }
+  }
+  for (int a = 0; a < m; ++a) {
+    double* wr = w + below[a] * s;
+    const double* la = wr + k0;
+    for (int b = 0; b <= a; ++b) {
+      const double* eb = e + b * ke;
+      wr[below[b]] -= sum4(width, [&](int c) { return la[c] * eb[c]; });
+    }
+  }
+  for (int c = k0; c <= k1; ++c)  // the columns as the solves read them
+    for (int q = plan.col_start_[c]; q < plan.col_start_[c + 1]; ++q)
+      lcol_[q] = w[plan.col_rows_[q] * s + c];
+  return true;
+}
+
 bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   plan_ = &plan;
   double* w = w_.data();
@@ -131,29 +263,15 @@ bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
     const LdltPlan::Copy& c = plan.copies_[g];
     for (int e = 0; e < c.count; ++e) w[c.dst + e] = a[c.src + e];
   }
-  // Right-looking: column k (pivot d_k) updates the rows and columns of its pattern only, run by
-  // run; u holds column k by position.
-  alignas(16) double u[LdltPlan::kMaxRows];
-  for (int k = 0; k < df; ++k) {
-    const double d = w[k * s + k];
-    if (!(d > 0.0) || !std::isfinite(d)) return false;
-    const double inv = 1.0 / d;
-    dinv_[k] = inv;
-    const int q0 = plan.col_start_[k], q1 = plan.col_start_[k + 1];
-    const LdltPlan::Run* runs = plan.runs_.data() + plan.run_start_[k];
-    const int nruns = plan.run_start_[k + 1] - plan.run_start_[k];
-    for (int q = q0; q < q1; ++q) u[plan.col_rows_[q]] = w[plan.col_rows_[q] * s + k];
-    for (int q = q0; q < q1; ++q) {
-      const int r = plan.col_rows_[q];
-      double* wr = w + r * s;
-      const double l = u[r] * inv;
-      for (int g = 0; g < nruns && runs[g].first <= r; ++g) {
-        const int end = std::min(runs[g].first + runs[g].count, r + 1);
-        for (int j = runs[g].first; j < end; ++j) wr[j] -= l * u[j];
-      }
-      wr[k] = l;
-      lcol_[q] = l;
+  // Right-looking from supernode to supernode (lone columns one by one), then the dense tail.
+  for (int sn = 0; sn < plan.n_supers_; ++sn) {
+    const int k = plan.supers_[sn].first;
+    if (plan.supers_[sn].width >= kDenseSupernode) {
+      if (!factor_supernode(k, plan.supers_[sn].width)) return false;
+      continue;
     }
+    for (int kk = k; kk < k + plan.supers_[sn].width; ++kk)
+      if (!factor_column(kk)) return false;
   }
   if (df < n) {
     dFactorLDLT(w + df * s + df, dinv_.data() + df, n - df, s);
@@ -163,13 +281,14 @@ bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   return true;
 }
 
+
 void SparseLdlt::solve(double* x) const {
   const LdltPlan& plan = *plan_;
-  const double* w = w_.data();
-  const double* lc = lcol_.data();
-  const std::uint8_t* cr = plan.col_rows_.data();
+  const double* __restrict w = w_.data();
+  const double* __restrict lc = lcol_.data();
+  const std::uint8_t* __restrict cr = plan.col_rows_.data();
   const int s = plan.w_stride_, n = plan.n_, df = plan.dense_from_;
-  double* y = y_.data();
+  double* __restrict y = y_.data();
   for (int p = 0; p < n; ++p) y[p] = x[plan.perm_[p]];
   // L z = x: sparse columns, then the dense tail by rows.
   for (int k = 0; k < df; ++k) {
@@ -177,10 +296,9 @@ void SparseLdlt::solve(double* x) const {
     for (int q = plan.col_start_[k]; q < plan.col_start_[k + 1]; ++q) y[cr[q]] -= lc[q] * yk;
   }
   for (int i = df + 1; i < n; ++i) {
-    const double* wi = w + i * s;
-    double t = y[i];
-    for (int k = df; k < i; ++k) t -= wi[k] * y[k];
-    y[i] = t;
+    const double* wi = w + i * s + df;
+    const double* yd = y + df;
+    y[i] -= sum4(i - df, [&](int k) { return wi[k] * yd[k]; });
   }
   for (int k = 0; k < n; ++k) y[k] *= dinv_[k];
   // Lᵀ x = z: the dense tail by rows (bottom up), then the sparse columns.
@@ -190,9 +308,8 @@ void SparseLdlt::solve(double* x) const {
     for (int k = df; k < i; ++k) y[k] -= wi[k] * yi;
   }
   for (int k = df - 1; k >= 0; --k) {
-    double t = y[k];
-    for (int q = plan.col_start_[k]; q < plan.col_start_[k + 1]; ++q) t -= lc[q] * y[cr[q]];
-    y[k] = t;
+    const int q0 = plan.col_start_[k];
+    y[k] -= sum4(plan.col_start_[k + 1] - q0, [&](int q) { return lc[q0 + q] * y[cr[q0 + q]]; });
   }
   for (int p = 0; p < n; ++p) x[plan.perm_[p]] = y[p];
 }

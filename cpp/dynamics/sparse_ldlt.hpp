@@ -26,6 +26,9 @@ class LdltPlan {
   /// Whether a matrix with this pattern (same rows) can be factorised with this plan: every
   /// non-zero lies in the pattern of the factor.
   bool covers(const Mask* pattern) const;
+  /// The same asked of A itself (same rows and stride): every entry outside the factor's
+  /// pattern is zero. Reads only those entries.
+  bool covers(const double* a) const;
   int size() const { return n_; }
   int stride() const { return stride_; }
   const unsigned* rows() const { return rows_.data(); }
@@ -49,6 +52,14 @@ class LdltPlan {
   std::array<std::uint16_t, kMaxRows + 1> col_start_{}, run_start_{};
   std::array<std::uint8_t, kMaxRows * kMaxRows / 2> col_rows_{};
   std::array<Run, kMaxRows * kMaxRows / 2> runs_{};
+  // Supernodes among the sparse columns: consecutive columns whose patterns nest (column k's is
+  // k + 1 and column k + 1's), so that they share the rows below the last one. Width 1 = a lone
+  // column.
+  struct Supernode {
+    std::uint8_t first, width;
+  };
+  int n_supers_ = 0;
+  std::array<Supernode, kMaxRows> supers_{};
   // The entries of the factor's pattern, copied from A into the working matrix in runs that are
   // consecutive in both.
   struct Copy {
@@ -57,6 +68,12 @@ class LdltPlan {
   };
   int n_copies_ = 0;
   std::array<Copy, kMaxRows * (kMaxRows + 1) / 2> copies_{};
+  // The entries of A outside the factor's pattern, in runs consecutive in A (covers(a)).
+  struct Zeros {
+    std::uint32_t src, count;
+  };
+  int n_zeros_ = 0;
+  std::array<Zeros, kMaxRows * (kMaxRows + 1) / 2> zeros_{};
 };
 
 /// Numeric factorisation with a plan; working data preallocated (never allocates).
@@ -69,10 +86,14 @@ class SparseLdlt {
   void solve(double* x) const;
 
  private:
+  bool factor_column(int k);
+  bool factor_supernode(int k0, int width);
   const LdltPlan* plan_ = nullptr;
   alignas(64) std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> w_{};  // L, row-major
   std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows / 2> lcol_{};  // sparse columns of L
   std::array<double, LdltPlan::kMaxRows> dinv_{};  // 1 / D
+  // d_c L_rc of the rows below a supernode, over its columns (row stride kMaxRows)
+  alignas(16) std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> e_{};
   mutable std::array<double, LdltPlan::kMaxRows> y_{};
 };
 

@@ -117,6 +117,16 @@ TEST(SparseLdlt, MinimumDegreeEliminatesAStarWithoutFill) {
   std::vector<Mask> fewer = star;
   fewer[9] = Mask{1} << 9;  // a subset of the pattern is
   EXPECT_TRUE(plan.covers(fewer.data()));
+  // The same asked of the values (only the entries outside the factor are read).
+  std::vector<double> a(n * n, std::nan(""));  // junk above the diagonal
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j <= i; ++j) a[i * n + j] = i == j ? 2.0 : (j == 0 ? 0.1 : 0.0);
+  EXPECT_TRUE(plan.covers(a.data()));
+  a[7 * n + 3] = 1e-300;
+  EXPECT_FALSE(plan.covers(a.data()));
+  a[7 * n + 3] = -0.0;  // a zero all the same
+  a[9 * n + 0] = 0.0;
+  EXPECT_TRUE(plan.covers(a.data()));
 }
 
 TEST(SparseLdlt, RefusesAMatrixThatIsNotPositiveDefinite) {
