@@ -6,6 +6,7 @@
 #include <ode/ode.h>
 
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -212,20 +213,66 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
 LcpScope::LcpScope(LcpWorkspace* ws) { current = ws; }
 LcpScope::~LcpScope() { current = nullptr; }
 
+namespace {
+
+thread_local bool probing = false;  // sparse_lcp_active() is stepping its probe world
+
+// One step of a probe world through the hook: a tumbling box held at a point by a ball joint
+// (three unbounded rows) above a frictionless contact that separates (a row resting at its
+// zero bound). Returns the box's velocities; `sparse` chooses the solver.
+std::array<double, 6> probe_step(bool sparse, LcpWorkspace& ws) {
+  dWorldID w = dWorldCreate();
+  dWorldSetGravity(w, 0.0, 0.0, -9.81);
+  dJointGroupID group = dJointGroupCreate(0);
+  dBodyID b = dBodyCreate(w);
+  dMass m;
+  dMassSetBoxTotal(&m, 2.0, 0.3, 0.2, 0.1);
+  dBodySetMass(b, &m);
+  dBodySetPosition(b, 0.1, 0.0, 0.5);
+  dBodySetLinearVel(b, 0.2, -0.1, 0.5);
+  dBodySetAngularVel(b, 1.0, 2.0, -0.5);
+  dJointID ball = dJointCreateBall(w, group);
+  dJointAttach(ball, b, nullptr);
+  dJointSetBallAnchor(ball, 0.0, 0.05, 0.55);
+  dContact c{};
+  c.geom.pos[2] = 0.4;
+  c.geom.normal[2] = 1.0;
+  dJointAttach(dJointCreateContact(w, group, &c), b, nullptr);
+  ws.enabled = sparse;
+  {
+    const LcpScope scope(&ws);
+    dWorldStep(w, 0.01);
+  }
+  std::array<double, 6> v;
+  for (int k = 0; k < 3; ++k) {
+    v[k] = dBodyGetLinearVel(b)[k];
+    v[3 + k] = dBodyGetAngularVel(b)[k];
+  }
+  dJointGroupDestroy(group);
+  dWorldDestroy(w);
+  return v;
+}
+
+}  // namespace
+
 bool sparse_lcp_active() {
   static const bool active = [] {
-    // One body on a ball joint to the world: three unbounded rows.
-    dWorldID w = dWorldCreate();
-    dBodyID b = dBodyCreate(w);
-    dJointID j = dJointCreateBall(w, nullptr);
-    dJointAttach(j, b, nullptr);
-    dJointSetBallAnchor(j, 0.0, 0.0, 1.0);
+    // ODE's calls reach the hook, ODE's own solver is there to fall back on, and on a probe
+    // step the sparse path answers as ODE's solver does (a check that ODE's data layout is the
+    // one solve_sparse() reads). Otherwise every solve goes to ODE.
+    probing = true;
     reached = false;
-    dWorldStep(w, 0.01);
-    dWorldDestroy(w);
-    if (reached && ode_solver() == nullptr)  // ODE would get no solver at all: refuse to run
+    auto ws = std::make_unique<LcpWorkspace>();
+    const std::array<double, 6> ode = probe_step(false, *ws);
+    const bool hooked = reached;
+    const std::array<double, 6> ours = probe_step(true, *ws);
+    probing = false;
+    if (!hooked) return false;
+    if (ode_solver() == nullptr)  // ODE would get no solver at all: refuse to run
       throw std::runtime_error("ODE's dxSolveLCP (" + std::string(kSymbol) + ") not found");
-    return reached;
+    bool same = ws->sparse == 1 && ws->dense == 1;
+    for (int k = 0; k < 6; ++k) same = same && std::abs(ours[k] - ode[k]) <= 1e-12 * (1.0 + std::abs(ode[k]));
+    return same;
   }();
   return active;
 }
@@ -237,7 +284,8 @@ void dxSolveLCP(dxWorldProcessMemArena* memarena, unsigned n, dReal* A, dReal* p
   using namespace ernest::dynamics::detail;
   reached = true;
   LcpWorkspace* ws = current;
-  if (ws && ws->enabled && solve_sparse(*ws, n, A, pairsbx, outer_w, nub, pairslh, findex)) {
+  if (ws && ws->enabled && (probing || sparse_lcp_active()) &&
+      solve_sparse(*ws, n, A, pairsbx, outer_w, nub, pairslh, findex)) {
     ++ws->sparse;
     return;
   }

@@ -58,7 +58,9 @@ class LcpScope {
 };
 
 /// Whether ODE's calls reach ode_lcp.cpp's solver in this process (the symbol interposition
-/// worked). Steps one tiny world once, on first use.
+/// worked) and it answers a probe step as ODE's own solver does; if not, every solve goes to
+/// ODE. Steps a tiny world twice, once, on first use; throws std::runtime_error if ODE's calls
+/// reach the hook but ODE's own solver cannot be found.
 bool sparse_lcp_active();
 
 }  // namespace ernest::dynamics::detail
