@@ -1,5 +1,6 @@
 // Sparse LDLᵀ (sparse_ldlt.hpp): minimum-degree order on bit masks, right-looking elimination of
-// the sparse columns, ODE's dense LDLᵀ for the trailing clique.
+// the sparse columns (supernodes with ODE's dense kernels), ODE's dense LDLᵀ for the trailing
+// clique.
 #include "ernest/dynamics/sparse_ldlt.hpp"
 
 #include <emmintrin.h>
@@ -116,7 +117,6 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     run_start_[c] = static_cast<std::uint16_t>(nruns);
     Mask below = 0;  // positions
     for (Mask m = column[c]; m; m &= m - 1) below |= bit(pos[low(m)]);
-    copy(c, c);
     for (Mask m = below; m; m &= m - 1) {
       const int r = low(m);
       col_rows_[nr++] = static_cast<std::uint8_t>(r);
@@ -127,6 +127,7 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     }
   }
   col_start_[dense_from_] = static_cast<std::uint16_t>(nr);
+  run_start_[dense_from_] = static_cast<std::uint16_t>(nruns);
   n_supers_ = 0;
   for (int c = 0; c < dense_from_;) {
     int w = 1;
@@ -142,7 +143,7 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     supers_[n_supers_++] = Supernode{static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(w)};
     c += w;
   }
-  run_start_[dense_from_] = static_cast<std::uint16_t>(nruns);
+  // A's entries outside the factor's pattern (covers(a)), in runs.
   n_zeros_ = 0;
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j <= i; ++j) {
@@ -280,7 +281,6 @@ bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   }
   return true;
 }
-
 
 void SparseLdlt::solve(double* x) const {
   const LdltPlan& plan = *plan_;
