@@ -46,90 +46,113 @@ OdeSolve ode_solver() {
   return fn;
 }
 
-// The problem as one linear system: every row unbounded, or bounded with x = 0 allowed by the
-// bound that is zero. Solved, checked and written back only if Dantzig's method would end
-// there: each bounded row's w = A_i x - b_i lies on the side its zero bound allows (ODE's
-// test, in its order; x of the other bounded rows is 0). Returns false without touching the
-// outputs otherwise.
+// The LCP as one linear system: the unbounded rows and the bounded rows guessed inside their
+// bounds ("active") are solved together, every other bounded row sits at its zero bound
+// (x = 0). Accepted only where Dantzig's method ends too (the solution is unique: A is
+// positive definite): an active row's x within its bounds, an inactive row's w = A_i x - b_i
+// on the side its zero bound allows (ODE's own test; a row with lo = hi = 0 is never checked,
+// as in ODE). A wrong guess is flipped and the system solved again, kAttempts times at most.
+// The guess starts from the last accepted one for the same bounded rows (LcpWorkspace::
+// guesses). Returns false without touching the outputs if no guess held, if a row has bounds
+// that depend on another's force (findex) or no zero bound, or if there are over 64 rows.
 bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx, double* outer_w,
                   unsigned nub, const double* pairslh, const int* findex) {
+  using Mask = LdltPlan::Mask;
   constexpr int kMax = LdltPlan::kMaxRows;
-  if (n > static_cast<unsigned>(kMax)) return false;  // (row masks of 64 bits)
-  std::array<unsigned, kMax> urows, brows;
-  int nu = 0, nb = 0;
+  constexpr int kAttempts = 3;
+  if (n > static_cast<unsigned>(kMax) || n == 0) return false;  // (row masks of 64 bits)
+  Mask bounded = 0;
   for (unsigned i = 0; i < n; ++i) {
     const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
-    if (i < nub || ((!findex || findex[i] < 0) && lo == -dInfinity && hi == dInfinity)) {
-      urows[nu++] = i;
-    } else {
-      if ((findex && findex[i] >= 0) || (lo != 0.0 && hi != 0.0)) return false;
-      brows[nb++] = i;
-    }
+    if (i < nub || ((!findex || findex[i] < 0) && lo == -dInfinity && hi == dInfinity)) continue;
+    if ((findex && findex[i] >= 0) || (lo != 0.0 && hi != 0.0)) return false;
+    bounded |= Mask{1} << i;
   }
-  if (nu == 0) return false;
+  const Mask all = n == 64 ? ~Mask{0} : (Mask{1} << n) - 1;
   const unsigned stride = dPAD(n);
-  // A remembered plan for these rows serves if A has no non-zero outside its factor; otherwise
-  // A's pattern (the non-zeros of each row's lower triangle, two at a time, without the bounded
-  // rows' columns) makes or grows one.
-  LdltPlan* known = ws.find(urows.data(), nu, static_cast<int>(stride));
-  const LdltPlan* plan = known;
-  if (!known || !known->covers(A)) {
-    std::array<LdltPlan::Mask, kMax> pattern;
-    const __m128d zero = _mm_setzero_pd();
-    for (int a = 0; a < nu; ++a) {
-      const unsigned i = urows[a];
-      const double* row = A + i * stride;
-      LdltPlan::Mask m = 0;
-      for (unsigned j = 0; j <= i; j += 2)  // row[i + 1] exists: i is odd when stride == n
-        m |= LdltPlan::Mask(_mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero))) << j;
-      if (i < 63) m &= (LdltPlan::Mask{2} << i) - 1;
-      for (int c = nb - 1; c >= 0; --c) {  // drop column brows[c], shifting the ones above it
-        const LdltPlan::Mask below = (LdltPlan::Mask{1} << brows[c]) - 1;
-        m = (m & below) | ((m >> 1) & ~below);
+  LcpWorkspace::Guess* memory = ws.guess_for(n, bounded);
+  Mask active = memory ? memory->active : 0;
+  std::array<unsigned, kMax> rows;  // the solved rows: unbounded and active
+  std::array<double, kMax> x, w;
+  Mask solved = 0;
+  bool held = false;
+  for (int attempt = 0; attempt < kAttempts && !held; ++attempt) {
+    solved = (all & ~bounded) | (active & bounded);
+    int nf = 0;
+    for (Mask m = solved; m; m &= m - 1) rows[nf++] = static_cast<unsigned>(__builtin_ctzll(m));
+    if (nf > 0) {
+      // A remembered plan for these rows serves if A has no non-zero outside its factor;
+      // otherwise A's pattern (each solved row's non-zeros left of the diagonal, two at a time,
+      // the other rows' columns dropped) makes or grows one.
+      LdltPlan* known = ws.find(rows.data(), nf, static_cast<int>(stride));
+      const LdltPlan* plan = known;
+      if (!known || !known->covers(A)) {
+        std::array<Mask, kMax> pattern;
+        const __m128d zero = _mm_setzero_pd();
+        for (int a = 0; a < nf; ++a) {
+          const unsigned i = rows[a];
+          const double* row = A + i * stride;
+          Mask m = 0;
+          for (unsigned j = 0; j <= i; j += 2)  // row[i + 1] exists: i is odd when stride == n
+            m |= Mask(_mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero))) << j;
+          const Mask upto = i < 63 ? (Mask{2} << i) - 1 : ~Mask{0};
+          m &= upto;
+          for (Mask o = ~solved & upto; o; o &= ~(Mask{1} << (63 - __builtin_clzll(o)))) {
+            const Mask below = (Mask{1} << (63 - __builtin_clzll(o))) - 1;  // drop the other
+            m = (m & below) | ((m >> 1) & ~below);  // rows' columns, top down
+          }
+          pattern[a] = m;
+        }
+        plan = &ws.adopt(known, pattern.data(), rows.data(), nf, static_cast<int>(stride));
       }
-      pattern[a] = m;
+      if (!ws.ldlt.factor(*plan, A)) return false;
+      for (int a = 0; a < nf; ++a) x[a] = pairsbx[2 * rows[a]];
+      ws.ldlt.solve(x.data());
     }
-    plan = &ws.adopt(known, pattern.data(), urows.data(), nu, static_cast<int>(stride));
+    Mask wrong = 0;
+    for (int a = 0; a < nf; ++a) {
+      const unsigned i = rows[a];
+      if (!std::isfinite(x[a])) return false;
+      if (!(bounded >> i & 1)) continue;
+      const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
+      if (x[a] < lo || x[a] > hi) wrong |= Mask{1} << i;
+    }
+    for (Mask m = bounded & ~solved; m; m &= m - 1) {
+      // w_i = A_i x - b_i: A's row i left of the diagonal, its column i below (lower triangle),
+      // in two interleaved sums (a single one waits an add latency per term).
+      const unsigned i = static_cast<unsigned>(__builtin_ctzll(m));
+      const int split = __builtin_popcountll(solved & ((Mask{1} << i) - 1));
+      const double* row = A + i * stride;
+      double s0 = 0.0, s1 = 0.0;
+      int a = 0;
+      for (; a + 1 < split; a += 2) {
+        s0 += row[rows[a]] * x[a];
+        s1 += row[rows[a + 1]] * x[a + 1];
+      }
+      if (a < split) {
+        s0 += row[rows[a]] * x[a];
+        ++a;
+      }
+      for (; a + 1 < nf; a += 2) {
+        s0 += A[rows[a] * stride + i] * x[a];
+        s1 += A[rows[a + 1] * stride + i] * x[a + 1];
+      }
+      if (a < nf) s0 += A[rows[a] * stride + i] * x[a];
+      const double wi = (s0 + s1) - pairsbx[2 * i];
+      const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
+      if (!((lo == 0.0 && wi >= 0.0) || (hi == 0.0 && wi <= 0.0) || wi == 0.0)) wrong |= Mask{1} << i;
+      w[i] = wi;
+    }
+    held = wrong == 0;
+    active ^= wrong;
   }
-  if (!ws.ldlt.factor(*plan, A)) return false;
-  std::array<double, kMax> x;
-  for (int a = 0; a < nu; ++a) x[a] = pairsbx[2 * urows[a]];
-  ws.ldlt.solve(x.data());
-  std::array<double, kMax> w;
-  for (int c = 0; c < nb; ++c) {
-    // w_i = A_i x - b_i: A's row i left of the diagonal, its column i below (lower triangle),
-    // in two interleaved sums each (a single one waits an add latency per term).
-    const unsigned i = brows[c];
-    const int split = static_cast<int>(i) - c;  // unbounded rows before i (brows ascending)
-    const double* row = A + i * stride;
-    double s0 = 0.0, s1 = 0.0;
-    int a = 0;
-    for (; a + 1 < split; a += 2) {
-      s0 += row[urows[a]] * x[a];
-      s1 += row[urows[a + 1]] * x[a + 1];
-    }
-    if (a < split) {
-      s0 += row[urows[a]] * x[a];
-      ++a;
-    }
-    for (; a + 1 < nu; a += 2) {
-      s0 += A[urows[a] * stride + i] * x[a];
-      s1 += A[urows[a + 1] * stride + i] * x[a + 1];
-    }
-    if (a < nu) s0 += A[urows[a] * stride + i] * x[a];
-    const double s = (s0 + s1) - pairsbx[2 * i];
-    const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
-    if (!((lo == 0.0 && s >= 0.0) || (hi == 0.0 && s <= 0.0) || s == 0.0)) return false;
-    w[c] = s;
-  }
-  for (int a = 0; a < nu; ++a) {
-    if (!std::isfinite(x[a])) return false;
-  }
-  for (int a = 0; a < nu; ++a) pairsbx[2 * urows[a] + 1] = x[a];
-  for (int c = 0; c < nb; ++c) pairsbx[2 * brows[c] + 1] = 0.0;
+  if (!held) return false;
+  ws.remember(memory, n, bounded, solved & bounded);
+  for (unsigned i = 0; i < n; ++i) pairsbx[2 * i + 1] = 0.0;
+  int nf = 0;
+  for (Mask m = solved; m; m &= m - 1) pairsbx[2 * rows[nf] + 1] = x[nf], ++nf;
   if (outer_w) {
-    for (int a = 0; a < nu; ++a) outer_w[urows[a]] = 0.0;
-    for (int c = 0; c < nb; ++c) outer_w[brows[c]] = w[c];
+    for (unsigned i = 0; i < n; ++i) outer_w[i] = (solved >> i & 1) ? 0.0 : w[i];
   }
   return true;
 }
@@ -157,12 +180,30 @@ const LdltPlan& LcpWorkspace::adopt(LdltPlan* remembered, const LdltPlan::Mask* 
   return p;
 }
 
+LcpWorkspace::Guess* LcpWorkspace::guess_for(unsigned n, std::uint64_t bounded) {
+  for (Guess& g : guesses)
+    if (g.n == n && g.bounded == bounded) return &g;
+  return nullptr;
+}
+
+void LcpWorkspace::remember(Guess* known, unsigned n, std::uint64_t bounded,
+                            std::uint64_t active) {
+  if (!known) {
+    known = &guesses[next_guess];
+    next_guess = (next_guess + 1) % kGuesses;
+  }
+  *known = Guess{n, bounded, active};
+}
+
 void LcpWorkspace::clear() {
   plans = {};
   next_plan = 0;
+  guesses = {};
+  next_guess = 0;
 }
 
-// Layout: next_plan, then per plan n (0: unused), stride, rows[n], pattern[n].
+// Layout: next_plan, then per plan n (0: unused), stride, rows[n], pattern[n]; then
+// next_guess and per guess n, bounded, active.
 void LcpWorkspace::save(std::vector<std::uint64_t>& out) const {
   out.clear();
   out.push_back(static_cast<std::uint64_t>(next_plan));
@@ -172,6 +213,12 @@ void LcpWorkspace::save(std::vector<std::uint64_t>& out) const {
     out.push_back(static_cast<std::uint64_t>(p.stride()));
     for (int i = 0; i < p.size(); ++i) out.push_back(p.rows()[i]);
     for (int i = 0; i < p.size(); ++i) out.push_back(p.pattern()[i]);
+  }
+  out.push_back(static_cast<std::uint64_t>(next_guess));
+  for (const Guess& g : guesses) {
+    out.push_back(g.n);
+    out.push_back(g.bounded);
+    out.push_back(g.active);
   }
 }
 
@@ -206,8 +253,16 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
     if (stride > 4 * LdltPlan::kMaxRows) bad();
     p.analyse(pattern.data(), rows.data(), static_cast<int>(n), static_cast<int>(stride));
   }
+  const std::uint64_t ng = next();
+  if (ng >= kGuesses) bad();
+  for (Guess& g : guesses) {
+    const std::uint64_t n = next(), bounded = next(), active = next();
+    if (n > LdltPlan::kMaxRows || (active & ~bounded) != 0) bad();
+    g = Guess{static_cast<unsigned>(n), bounded, active};
+  }
   if (k != in.size()) bad();
   next_plan = static_cast<int>(np);
+  next_guess = static_cast<int>(ng);
 }
 
 LcpScope::LcpScope(LcpWorkspace* ws) { current = ws; }

@@ -1,14 +1,15 @@
 // The constraint solve of dWorldStep through a sparse LDLᵀ (internal to cpp/dynamics).
 //
 // dWorldStep hands ODE's Dantzig LCP solver the dense matrix A = J M⁻¹ Jᵀ of all rows. With the
-// guessed active set (rover_step.cpp) almost every row is unbounded and the rest rest at a bound
-// of zero (contacts' slack normal rows), so the LCP is one linear system plus a check per bounded
-// row; ODE still factorises A densely, permuting rows one at a time. ode_lcp.cpp defines ODE's
-// (exported, called through the PLT) dxSolveLCP, so that the dynamic linker binds ODE's call to
-// it: while a LcpScope is alive on the thread, such problems are solved with SparseLdlt and
-// checked exactly as Dantzig's method would (each bounded row at x = 0 with w on its side);
-// anything else (friction with findex, a bounded row off its zero bound, a failed check, more
-// than 64 rows, no scope) goes to ODE's own solver, found with dlsym.
+// guessed active set (rover_step.cpp) almost every row is unbounded, and the rest are contact
+// normals bounded below by zero, whose state (pushing or not) repeats from step to step, so the
+// LCP is one linear system plus a check per bounded row; ODE still factorises A densely,
+// permuting rows one at a time. ode_lcp.cpp defines ODE's (exported, called through the PLT)
+// dxSolveLCP, so that the dynamic linker binds ODE's call to it: while a LcpScope is alive on
+// the thread, such problems are solved with SparseLdlt (the bounded rows guessed as they ended
+// last time) and checked exactly as Dantzig's method would end; anything else (friction with
+// findex, a bounded row without a zero bound, guesses that keep failing, more than 64 rows, no
+// scope) goes to ODE's own solver, found with dlsym.
 #pragma once
 
 #include <array>
@@ -21,17 +22,26 @@ namespace ernest::dynamics::detail {
 
 /// Working data of one simulation's constraint solves, and what they did.
 ///
-/// Plans are remembered per set of rows. The numeric pattern of A flickers as the rover moves
-/// through symmetric poses (an entry between two rows on one body is exactly zero in some
+/// Plans are remembered per set of solved rows. The numeric pattern of A flickers as the rover
+/// moves through symmetric poses (an entry between two rows on one body is exactly zero in some
 /// configurations), so a plan is analysed from the union of the patterns its rows have shown and
-/// kept while every new pattern lies within its factor. Plans therefore depend on the history:
-/// save() and load() carry them through Snapshot, and clear() starts a run afresh (reset), so
-/// that repeats stay bit-exact.
+/// kept while every new pattern lies within its factor. Which bounded rows were solved inside
+/// their bounds is remembered per set of bounded rows and is the next guess. Both depend on the
+/// history: save() and load() carry them through Snapshot, and clear() starts a run afresh
+/// (reset), so that repeats stay bit-exact.
 struct LcpWorkspace {
   bool enabled = true;  // false: count the solves, hand all of them to ODE
-  static constexpr int kPlans = 3;  // sets of rows remembered (a wheel leaving the ground and back)
+  static constexpr int kPlans = 4;  // sets of rows remembered (a wheel leaving the ground and back)
   std::array<LdltPlan, kPlans> plans{};
   int next_plan = 0;
+  /// Bounded rows (bit i: row i) solved inside their bounds when these rows were bounded.
+  struct Guess {
+    unsigned n = 0;
+    std::uint64_t bounded = 0, active = 0;
+  };
+  static constexpr int kGuesses = 4;
+  std::array<Guess, kGuesses> guesses{};
+  int next_guess = 0;
   SparseLdlt ldlt;
   std::uint64_t sparse = 0;    // solves done here
   std::uint64_t dense = 0;     // solves handed to ODE's Dantzig solver
@@ -42,6 +52,9 @@ struct LcpWorkspace {
   /// A plan covering this pattern: `remembered` (find()'s answer) grown by it, or a new one.
   const LdltPlan& adopt(LdltPlan* remembered, const LdltPlan::Mask* pattern,
                         const unsigned* rows, int n, int stride);
+  /// The remembered guess for this set of bounded rows, or nullptr; remember() stores one.
+  Guess* guess_for(unsigned n, std::uint64_t bounded);
+  void remember(Guess* known, unsigned n, std::uint64_t bounded, std::uint64_t active);
   void clear();
   void save(std::vector<std::uint64_t>& out) const;
   /// Inverse of save(); throws std::invalid_argument on data that save() cannot have written.

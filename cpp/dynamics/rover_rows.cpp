@@ -21,9 +21,10 @@ RoverSim::Impl::DriveRow RoverSim::Impl::drive_row(int k) const {
 
 // Rigid ground (§3.4) under wheel i: the contact's rows are guessed like the soil's. Normal at 0
 // (separating): no contact at all. Normal pushing and both friction rows inside mu times it
-// (sticking, the rolling wheel's usual case): three unbounded rows. A friction row at its bound
-// (sliding): ODE's own contact with its bounds, because the bound, mu times the normal force, is
-// itself unknown, so no explicit force can stand for it.
+// (sticking, the rolling wheel's usual case): a contact whose friction rows are unbounded (its
+// normal row, bounded below by zero, is solved exactly by the sparse solver, ode_lcp.cpp). A
+// friction row at its bound (sliding): ODE's own contact with its bounds, because the bound,
+// mu times the normal force, is itself unknown, so no explicit force can stand for it.
 RoverSim::Impl::RigidEmit RoverSim::Impl::rigid_emit(const std::int8_t* modes, int wheel) const {
   if (!modes) return RigidEmit::Bounded;
   const std::int8_t* m = modes + kRowsPerWheel * wheel;
@@ -32,30 +33,11 @@ RoverSim::Impl::RigidEmit RoverSim::Impl::rigid_emit(const std::int8_t* modes, i
   return RigidEmit::Bounded;
 }
 
-// One unbounded velocity row lambda = (motion - v . dir) / cfm, v the velocity of `point` on the
-// wheel body b (dir unit). ODE's DBall joint is the one joint made of a single unbounded row at
-// a chosen point and direction: anchors at the point and a distance L behind it along dir; with
-// ERP = 1 its right-hand side is (target distance - distance) / dt, so a target of L + motion dt
-// gives the motion (L > 2 |motion| dt keeps the target positive, as ODE requires). Unlike a
-// contact's friction row it brings no slack normal row along.
-void RoverSim::Impl::add_row(dBodyID b, const Vec3& point, const Vec3& dir, double motion,
-                             double cfm, dJointFeedback* fb) {
-  const double behind = 1.0 + 2.0 * std::abs(motion) * opt.dt;
-  const Vec3 a2 = point - behind * dir;
-  dJointID j = dJointCreateDBall(world, contacts);
-  dJointAttach(j, b, nullptr);
-  dJointSetDBallAnchor1(j, point.x(), point.y(), point.z());
-  dJointSetDBallAnchor2(j, a2.x(), a2.y(), a2.z());
-  dJointSetDBallDistance(j, behind + motion * opt.dt);
-  dJointSetDBallParam(j, dParamERP, 1.0);
-  dJointSetDBallParam(j, dParamCFM, cfm);
-  if (fb) dJointSetFeedback(j, fb);
-}
-
 // The x and y rows at the patch are the friction rows of an ODE contact with the terrain
-// normal n (fdir1 = x, then n × x = y), whose own normal row carries the normal force when that
-// is solved with its bound (>= 0). When the normal force is guessed positive it is an
-// unbounded row instead (add_row) and the contact's normal row is kept slack.
+// normal n (fdir1 = x, then n × x = y), whose own normal row carries the normal force, bounded
+// below by zero: the sparse solver (ode_lcp.cpp) solves it exactly whether it pushes or not, so
+// it needs no guess of its own. A normal force guessed at zero (the wheel leaving the soil
+// faster than F_z / c) keeps the row slack if shear rows need the contact.
 void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3& tw) {
   const auto mode_of = [&](int row) { return modes ? modes[row] : kBounded; };
   const bool soft = opt.ground == GroundType::Soil;
@@ -99,15 +81,6 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
   if (!soft) {
     const RigidEmit how = rigid_emit(modes, i);
     if (how == RigidEmit::None) return;
-    if (how == RigidEmit::Guessed) {
-      // The §3.4 spring–damper as ODE's normal row would apply it (lambda = (erp depth / dt
-      // - v_n) / cfm), and sticking friction rows with the contact's slip: three one-row joints
-      // (no contact joint, so no slack normal row for ODE to carry).
-      add_row(wb, g.point, g.n, contact_erp * g.depth / opt.dt, contact_cfm, &patch_fb[i][0]);
-      add_row(wb, g.point, g.fx, 0.0, opt.rigid_slip, &patch_fb[i][1]);
-      add_row(wb, g.point, g.fy, 0.0, opt.rigid_slip, &patch_fb[i][2]);
-      return;
-    }
     dContact ct;
     std::memset(&ct, 0, sizeof ct);
     for (int k = 0; k < 3; ++k) {
@@ -118,9 +91,11 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
     // before them (findex), an order-dependent approximation of Coulomb's law.
     for (int k = 0; k < 3; ++k) ct.fdir1[k] = g.fx[k];
     ct.geom.depth = g.depth;
-    ct.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
-                      dContactSlip2 | dContactFDir1;
-    ct.surface.mu = mu;
+    // Sticking (guessed): friction rows unbounded, the §3.4 spring–damper normal row as is.
+    const bool sticking = how == RigidEmit::Guessed;
+    ct.surface.mode = (sticking ? 0 : dContactApprox1) | dContactSoftERP | dContactSoftCFM |
+                      dContactSlip1 | dContactSlip2 | dContactFDir1;
+    ct.surface.mu = sticking ? dInfinity : mu;
     ct.surface.slip1 = ct.surface.slip2 = opt.rigid_slip;
     ct.surface.soft_erp = contact_erp;
     ct.surface.soft_cfm = contact_cfm;
@@ -152,20 +127,8 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
     slots[ns++] = Slot{dir, mode == kFree ? dInfinity : bound, slip, 0.0};
     x_row = x_row || k == 0;
   }
-  if (normal_mode == kFree && !x_row) {
-    // Normal force and at most the y row: one contact whose "normal" is x (kept slack), the
-    // normal force as its friction row along n, y as its second (x × n = -y).
-    Slot l[2] = {{g.n, dInfinity, 1.0 / c, g.fz / c}};
-    if (ns > 0) l[1] = slots[0];
-    make(g.fx, -kSlackSpeed, 1.0 / c, l, 1 + ns, nullptr);
-  } else {
-    // The contact along n with the x (and y) rows, its normal row bounded or slack, and a
-    // guessed normal force as its own row (two contacts would bring two slack rows).
-    if (normal_mode == kFree) add_row(wb, g.point, g.n, g.fz / c, 1.0 / c, nullptr);
-    if (normal_mode == kBounded || ns > 0)
-      make(g.n, normal_mode == kBounded ? g.fz / c : -kSlackSpeed, 1.0 / c, slots, ns,
-           &ground_fb[i]);
-  }
+  if (normal_mode != kAtLo || ns > 0)
+    make(g.n, normal_mode != kAtLo ? g.fz / c : -kSlackSpeed, 1.0 / c, slots, ns, &ground_fb[i]);
   // (b) Compaction row on the wheel centre.
   if (g.comp > 0.0) {
     const std::int8_t mode = mode_of(kRowsPerWheel * i + kCompaction);
@@ -243,12 +206,7 @@ bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& v
     next[r + kShearX] = next[r + kShearY] = kFree;
     return push <= 0.0;
   }
-  Vec3 f = Vec3::Zero();
-  if (how == RigidEmit::Guessed) {
-    for (const dJointFeedback& fb : patch_fb[i]) f += to_vec(fb.f1);
-  } else {
-    f = to_vec(ground_fb[i].f1);
-  }
+  const Vec3 f = to_vec(ground_fb[i].f1);
   const double fn = f.dot(g.n), fx = f.dot(g.fx), fy = f.dot(g.fy);
   row_force[r + kNormal] = fn;
   row_force[r + kShearX] = fx;
@@ -321,15 +279,15 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
       if (!settle_rigid(i, modes, vp, next)) held = false;
       continue;
     }
-    {  // normal force >= 0, F_z - c v_n at the patch: the row's law, or ODE's bounded row
+    {  // normal force >= 0, F_z - c v_n at the patch: the contact's row, or none (guessed at 0)
       const int row = kRowsPerWheel * i + kNormal;
       const std::int8_t mode = mode_of(row);
-      if (mode == kBounded) {
+      if (mode != kAtLo) {  // the contact's normal row, solved with its bound
         row_force[row] = to_vec(ground_fb[i].f1).dot(g.n);
-        outcome(row, row_force[row] > 0.0 ? kFree : kAtLo);
+        next[row] = row_force[row] > 0.0 ? kFree : kAtLo;
       } else {
         const double total = g.fz - opt.soil_normal_damping * vp.dot(g.n);
-        row_force[row] = mode == kFree ? total : 0.0;
+        row_force[row] = 0.0;
         outcome(row, total > 0.0 ? kFree : kAtLo);
       }
     }

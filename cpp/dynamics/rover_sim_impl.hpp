@@ -125,10 +125,8 @@ struct RoverSim::Impl {
   dJointID gimbal = nullptr;        // universal joint with the stops
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
   dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
-  // Ground feedback: the contact with the terrain normal (rows solved with their bounds), and
-  // the guessed rigid-ground rows (normal, x, y) of each wheel (rover_rows.cpp).
+  // Ground feedback: each wheel's contact with the terrain (rover_rows.cpp).
   std::array<dJointFeedback, 4> ground_fb{};
-  std::array<std::array<dJointFeedback, 3>, 4> patch_fb{};
   std::vector<dGeomID> obstacle_geoms;
   std::exception_ptr callback_error;
 
@@ -194,8 +192,6 @@ struct RoverSim::Impl {
     int body1, body2;  // the row drives (w_1 - w_2) . axis
   };
   DriveRow drive_row(int k) const;
-  void add_row(dBodyID b, const Vec3& point, const Vec3& dir, double motion, double cfm,
-               dJointFeedback* fb);
   enum class RigidEmit { None, Guessed, Bounded };
   RigidEmit rigid_emit(const std::int8_t* modes, int wheel) const;
   void emit(const std::int8_t* modes);

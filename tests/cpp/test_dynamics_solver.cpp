@@ -258,14 +258,19 @@ TEST(SparseLcp, CorruptSolverDataInASnapshotIsRejected) {
   EXPECT_NO_THROW(sim.step_n(5));
 }
 
-// The solver hook on a bare ODE world: a body on a frictionless contact (one row, bounded below
-// by 0) and a distance row (unbounded). Separating, the contact row rests at its zero bound and
-// the sparse path solves the step; pressed down by gravity, it must push, which only Dantzig's
-// pivoting finds: the sparse path has to notice and hand the step to ODE.
-TEST(SparseLcp, HandsAContactThatMustPushToOde) {
+// The solver hook on a bare ODE world: a box on a frictionless contact (one row, bounded below
+// by 0) and a distance row (unbounded). Separating, the contact row rests at its zero bound;
+// pressed down by gravity it must push: the first guess (as last time, or at its bound) fails
+// Dantzig's test and the second solves it. With Coulomb friction bounded by the normal force
+// (findex) the step goes to ODE.
+TEST(SparseLcp, SolvesContactsThatPushOrSeparateAndHandsFrictionBoundsToOde) {
   dInitODE2(0);
-  for (const double vz : {2.0, 0.0}) {
-    SCOPED_TRACE(vz);
+  struct Case {
+    double vz;
+    bool friction;
+  };
+  for (const Case k : {Case{2.0, false}, Case{0.0, false}, Case{0.0, true}}) {
+    SCOPED_TRACE(testing::Message() << k.vz << " " << k.friction);
     dWorldID w = dWorldCreate();
     dWorldSetGravity(w, 0.0, 0.0, -9.81);
     dJointGroupID group = dJointGroupCreate(0);
@@ -274,13 +279,13 @@ TEST(SparseLcp, HandsAContactThatMustPushToOde) {
     dMassSetBoxTotal(&m, 1.0, 0.2, 0.2, 0.2);
     dBodySetMass(b, &m);
     dBodySetPosition(b, 0.0, 0.0, 0.1);
-    dBodySetLinearVel(b, 0.0, 0.0, vz);
+    dBodySetLinearVel(b, 0.0, 0.0, k.vz);
     dContact c;
     std::memset(&c, 0, sizeof c);
     c.geom.pos[2] = 0.0;
     c.geom.normal[2] = 1.0;
-    c.surface.mode = 0;
-    c.surface.mu = 0.0;
+    c.surface.mode = k.friction ? dContactApprox1 : 0;
+    c.surface.mu = k.friction ? 0.5 : 0.0;
     dJointAttach(dJointCreateContact(w, group, &c), b, nullptr);
     dJointID ball = dJointCreateDBall(w, group);  // holds x: an unbounded row
     dJointAttach(ball, b, nullptr);
@@ -292,14 +297,22 @@ TEST(SparseLcp, HandsAContactThatMustPushToOde) {
       dWorldStep(w, 0.01);
     }
     const dReal* v = dBodyGetLinearVel(b);
-    if (vz > 0.0) {  // free flight: v = vz - g dt
-      EXPECT_NEAR(v[2], vz - 9.81 * 0.01, 1e-9);
-      EXPECT_EQ(ws.sparse, 1u);
-      EXPECT_EQ(ws.dense, 0u);
-    } else {  // the contact holds it: no velocity into the ground
-      EXPECT_NEAR(v[2], 0.0, 1e-6);
-      EXPECT_EQ(ws.sparse, 0u);
-      EXPECT_EQ(ws.dense, 1u);
+    if (k.vz > 0.0) {
+      EXPECT_NEAR(v[2], k.vz - 9.81 * 0.01, 1e-9);  // free flight
+    } else {
+      EXPECT_NEAR(v[2], 0.0, 1e-6);  // the contact holds it: no velocity into the ground
+    }
+    EXPECT_EQ(ws.sparse, k.friction ? 0u : 1u);
+    EXPECT_EQ(ws.dense, k.friction ? 1u : 0u);
+    if (k.vz == 0.0 && !k.friction) {
+      // Thrown up now: the remembered guess (pushing) would pull; it must let go.
+      dBodySetLinearVel(b, 0.0, 0.0, 2.0);
+      {
+        const detail::LcpScope scope(&ws);
+        dWorldStep(w, 0.01);
+      }
+      EXPECT_NEAR(dBodyGetLinearVel(b)[2], 2.0 - 9.81 * 0.01, 1e-9);
+      EXPECT_EQ(ws.sparse, 2u);
     }
     dJointGroupDestroy(group);
     dWorldDestroy(w);
