@@ -154,9 +154,9 @@ void bind_dynamics(py::module_& m) {
                      "guess the bounded rows' active set from the last step and verify it (same "
                      "solution, ~3x faster on soil); False always pivots in ODE's LCP")
       .def_readwrite("sparse_lcp", &SimOptions::sparse_lcp,
-                     "solve steps whose rows are unbounded or at a zero bound by a sparse LDL^T "
-                     "(minimum-degree order) instead of ODE's dense solver (same solution to "
-                     "rounding); False: ODE's solver for every step")
+                     "solve steps whose rows are unbounded or have a zero bound (contact "
+                     "normals) by a sparse LDL^T (minimum-degree order) instead of ODE's dense "
+                     "solver (same solution to rounding); False: ODE's solver for every step")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def("validate", &SimOptions::validate, "Raise ValueError naming an invalid field.");

@@ -57,8 +57,9 @@ struct SimOptions {
   /// LCP solution either way (to rounding); false always pivots (tests, comparisons).
   bool guess_active_set = true;
   /// Solve the step's constraint system with a sparse LDLᵀ (minimum-degree order,
-  /// cpp/dynamics/sparse_ldlt.hpp) when every row is unbounded or rests at a zero bound, which
-  /// the guessed active set makes the usual case, instead of ODE's dense Dantzig solver; other
+  /// cpp/dynamics/sparse_ldlt.hpp) when every row is unbounded or has a zero bound (the contacts'
+  /// normal rows, guessed pushing or not as they ended last time and checked), which the
+  /// guessed active set makes the usual case, instead of ODE's dense Dantzig solver; other
   /// steps still go to ODE. The same solution to rounding; false: ODE's solver for every step.
   bool sparse_lcp = true;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
@@ -137,7 +138,7 @@ struct SolverStats {
   std::uint64_t lcp_errors = 0;
   /// Constraint solves (one per attempt at a step) done by the sparse LDLᵀ (SimOptions::
   /// sparse_lcp), and those handed to ODE's Dantzig solver (friction bounded by a normal force,
-  /// a bounded row off its zero bound, or sparse_lcp off).
+  /// a bounded row without a zero bound, contact guesses that kept failing, or sparse_lcp off).
   std::uint64_t sparse_solves = 0;
   std::uint64_t dense_solves = 0;
 };
