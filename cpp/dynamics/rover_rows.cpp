@@ -112,7 +112,6 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
   const std::int8_t normal_mode = mode_of(kRowsPerWheel * i + kNormal);
   Slot slots[2];  // x then y: with fdir1 = x the second friction row is n × x = y
   int ns = 0;
-  bool x_row = false;
   // (a) Shear rows: at a guessed bound, explicit forces at the patch.
   for (int k = 0; k < 2; ++k) {
     const double bound = k == 0 ? g.ax : g.ay;
@@ -125,7 +124,6 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
     }
     const double slip = (k == 0 ? opt.soil.eps_contact_x : opt.soil.eps_contact_y) / bound;
     slots[ns++] = Slot{dir, mode == kFree ? dInfinity : bound, slip, 0.0};
-    x_row = x_row || k == 0;
   }
   if (normal_mode != kAtLo || ns > 0)
     make(g.n, normal_mode != kAtLo ? g.fz / c : -kSlackSpeed, 1.0 / c, slots, ns, &ground_fb[i]);
