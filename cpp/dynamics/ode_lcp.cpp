@@ -97,9 +97,10 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
             m |= Mask(_mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero))) << j;
           const Mask upto = i < 63 ? (Mask{2} << i) - 1 : ~Mask{0};
           m &= upto;
-          for (Mask o = ~solved & upto; o; o &= ~(Mask{1} << (63 - __builtin_clzll(o)))) {
-            const Mask below = (Mask{1} << (63 - __builtin_clzll(o))) - 1;  // drop the other
-            m = (m & below) | ((m >> 1) & ~below);  // rows' columns, top down
+          for (Mask o = ~solved & upto; o;) {  // drop the other rows' columns, top down
+            const Mask below = (Mask{1} << (63 - __builtin_clzll(o))) - 1;
+            m = (m & below) | ((m >> 1) & ~below);
+            o &= below;
           }
           pattern[a] = m;
         }
