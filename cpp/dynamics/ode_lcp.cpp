@@ -168,7 +168,6 @@ LdltPlan* LcpWorkspace::find(const unsigned* rows, int n, int stride) {
 
 const LdltPlan& LcpWorkspace::adopt(LdltPlan* remembered, const LdltPlan::Mask* pattern,
                                     const unsigned* rows, int n, int stride) {
-  ++analyses;
   if (remembered) {  // grow its pattern
     std::array<LdltPlan::Mask, LdltPlan::kMaxRows> u;
     for (int i = 0; i < n; ++i) u[i] = remembered->pattern()[i] | pattern[i];

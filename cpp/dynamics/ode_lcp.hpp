@@ -45,7 +45,6 @@ struct LcpWorkspace {
   SparseLdlt ldlt;
   std::uint64_t sparse = 0;    // solves done here
   std::uint64_t dense = 0;     // solves handed to ODE's Dantzig solver
-  std::uint64_t analyses = 0;  // symbolic analyses
 
   /// The remembered plan for these rows, or nullptr.
   LdltPlan* find(const unsigned* rows, int n, int stride);

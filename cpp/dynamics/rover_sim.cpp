@@ -200,6 +200,7 @@ RoverSim::Impl::~Impl() {
 void RoverSim::Impl::build() {
   init_ode_once();
   detail::sparse_lcp_active();  // find ODE's own solver now: throws here, not inside a step
+  lcp.enabled = opt.sparse_lcp;
   world = dWorldCreate();
   // ODE's default step threading implementation is one object shared by every world and is not
   // thread-safe (ReleaseAJob assertions when two worlds step on two threads): each world gets

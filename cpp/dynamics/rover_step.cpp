@@ -296,7 +296,6 @@ void RoverSim::Impl::step() {
   bool held = false;
   alternating = false;
   const std::uint64_t lcp_messages = ode_lcp_messages;
-  lcp.enabled = opt.sparse_lcp;
   const detail::LcpScope lcp_scope(&lcp);
   while (opt.guess_active_set && !held && attempts < kMaxGuesses + kGuessedRowCount) {
     if (attempts++ > 0) restore_bodies();
