@@ -236,13 +236,16 @@ void bind_dynamics(py::module_& m) {
                     "constraint solves (one per attempt at a step) done by the sparse LDL^T")
       .def_readonly("dense_solves", &SolverStats::dense_solves,
                     "constraint solves handed to ODE's Dantzig solver")
+      .def_readonly("slip_solves", &SolverStats::slip_solves,
+                    "extra solves of a step that made its slip agree with eq 12 at its end")
       .def("__repr__", [](const SolverStats& s) {
         return "SolverStats(steps=" + std::to_string(s.steps) + ", first_guess=" +
                std::to_string(s.first_guess) + ", later_guess=" + std::to_string(s.later_guess) +
                ", pivoted=" + std::to_string(s.pivoted) + ", lcp_errors=" +
                std::to_string(s.lcp_errors) + ", sparse_solves=" +
                std::to_string(s.sparse_solves) + ", dense_solves=" +
-               std::to_string(s.dense_solves) + ")";
+               std::to_string(s.dense_solves) + ", slip_solves=" +
+               std::to_string(s.slip_solves) + ")";
       });
 
   py::class_<Snapshot>(m, "Snapshot", "Complete simulation state for RoverSim.restore().")

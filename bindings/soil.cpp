@@ -39,6 +39,9 @@ void bind_soil(py::module_& m) {
       .def_readwrite("eps_contact_y", &SoilParameters::eps_contact_y, "[m/s] (eq 29)")
       .def_readwrite("eps_direction", &SoilParameters::eps_direction,
                      "regularisation of sign(v_x) in eqs 30, 32 [m/s]; 0 = the paper's sign")
+      .def_readwrite("slip_clamp_first", &SoilParameters::slip_clamp_first,
+                     "eq 12 braking ratio clamped before the regularisation (ours; False = as "
+                     "printed)")
       .def_readwrite("gravity", &SoilParameters::gravity, "[m/s^2], for the unit weight in eq 24")
       .def("validate", &SoilParameters::validate,
            "Raise ValueError naming the first field outside its allowed range.")
@@ -115,8 +118,9 @@ void bind_soil(py::module_& m) {
       .def_property_readonly("points_per_panel", &BekkerWongModel::points_per_panel);
   m.attr("DEFAULT_POINTS_PER_PANEL") = BekkerWongModel::kDefaultPointsPerPanel;
 
-  m.def("slip_ratio", &slip_ratio, "vx"_a, "vcx"_a, "eps_slip"_a,
-        "Regularised slip ratio of eq 12, clamped to [-1, 1].");
+  m.def("slip_ratio", &slip_ratio, "vx"_a, "vcx"_a, "eps_slip"_a, "clamp_first"_a = true,
+        "Regularised slip ratio of eq 12, clamped to [-1, 1] (clamp_first: see "
+        "SoilParameters.slip_clamp_first).");
 
   py::class_<RigidContactParameters>(m, "RigidContactParameters",
                                      "Spring–damper rigid contact of seed 004 §3.4.")

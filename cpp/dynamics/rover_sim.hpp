@@ -141,6 +141,9 @@ struct SolverStats {
   /// a bounded row without a zero bound, contact guesses that kept failing, or sparse_lcp off).
   std::uint64_t sparse_solves = 0;
   std::uint64_t dense_solves = 0;
+  /// Extra solves of a step made to find the slip ratios that agree with eq 12 at the step's end
+  /// (the implicit slip of cpp/dynamics/rover_step.cpp); 0 when the first slip already agreed.
+  std::uint64_t slip_solves = 0;
 };
 
 /// Complete simulation state; restore() reproduces the run bit for bit.

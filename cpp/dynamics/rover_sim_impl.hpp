@@ -67,6 +67,11 @@ constexpr int kMaxGuesses = 3;       // guesses of a step before failing rows ar
 constexpr double kMinRowBound = 1e-3;
 constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
 constexpr double kStickMargin = 0.8;   // rigid friction above 0.8 mu F_n: solved bounded next step
+// Implicit slip (rover_step.cpp): a step is accepted when every wheel's slip ratio of eq 12 at
+// the end-of-step velocities is within kSlipTolerance of the slip the step used; at most
+// kMaxSlipSolves solves of the step per step.
+constexpr double kSlipTolerance = 2e-3;
+constexpr int kMaxSlipSolves = 12;
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
 
@@ -88,8 +93,11 @@ struct GroundContact {
   Vec3 point = Vec3::Zero(), arm = Vec3::Zero();  // arm = point - wheel centre
   Vec3 n = Vec3::UnitZ(), fx = Vec3::UnitX(), fy = Vec3::UnitY(), axle = Vec3::UnitY();
   double depth = 0.0;
-  // soft soil: bounds of the implicit rows and the explicit normal force (eqs 28–32)
+  // soft soil: bounds of the implicit rows and the explicit normal force (eqs 28–32), and the
+  // explicit share of the soil's axle torque (world), all at the slip of the current attempt
   double ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0;
+  Vec3 torque = Vec3::Zero();
+  soil::ContactState cs{};  // eq 12–32 inputs at the start of the step (Fig. 7 frame)
 };
 
 // One bounded velocity row of a motor: drive the relative rate to `target` with |torque| <= bound
@@ -184,6 +192,11 @@ struct RoverSim::Impl {
                      Vec3& ea) const;
   void prepare_actuators(double psi, double phi);
   void prepare_ground();
+  void soil_terms(int wheel, double slip);
+  void end_velocity(int wheel, double& vx, double& vcx) const;
+  bool solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess,
+                  std::array<std::int8_t, kGuessedRowCount>& next,
+                  std::array<std::int8_t, kGuessedRowCount>& tried, int& attempts);
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);
   struct DriveRow {

@@ -15,8 +15,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <string>
+
+#include <Eigen/LU>
 
 #include "ernest/dynamics/rover_sim_impl.hpp"
 
@@ -158,37 +161,57 @@ void RoverSim::Impl::prepare_ground() {
     st.contact_vx[i] = to_vec(vp).dot(g.fx);
     st.contact_vy[i] = to_vec(vp).dot(g.fy);
     if (!soft) continue;
-    // Bekker–Wong (eqs 12–32) split into what ODE integrates implicitly and the rest:
-    // (a) the shear, whose regularisation tau -> sign(-v_c) min(|v_c|/eps_contact, 1) tau
-    //     (eqs 28–29) is a viscous law with a force cap: friction rows at the contact point with
-    //     force-dependent slip (velocity = slip * force) and bounds +-F_sat;
-    // (b) the compaction resistance -sign(v_x) rb int sigma sin (eq 30), whose regularised sign
-    //     clamp(v_x / eps_direction) is the same kind of law on the wheel-centre velocity: a
-    //     linear-motor row with CFM = eps_direction / F and bounds +-F;
-    // (c) the normal force (eq 32, with the shear's normal part at last step's level) as the
-    //     target of the contact's normal row, a damper that never pulls: F_n = max(0, F_z - c v_n);
-    // (d) explicit: the share of the axle torque the rows do not produce, at last step's levels.
-    // Treated explicitly, (a) and (b) are stiff dampers (~1e4 N s/m) unstable at any useful step.
     const double vx = vc.dot(g.fx);
     // The model uses sign(v_x) exactly; at v_x = 0 the sign is taken as +.
-    const soil::ContactState cs{dp.depth, vx != 0.0 ? vx : 1e-12, vc.dot(g.fy), st.contact_vx[i],
-                                st.contact_vy[i]};
-    const soil::SoilSplit s = soil.split(cs);
-    st.slip[i] = s.slip;
-    g.ax = std::max(s.fx_shear, 0.0);
-    g.ay = std::max(s.fy_shear, 0.0);
-    const double sign_vx = cs.vx > 0.0 ? 1.0 : -1.0;
-    g.comp = std::max(-s.fx_pressure * sign_vx, 0.0);  // rb int sigma sin theta (eq 30)
-    if (g.comp < kMinRowBound) g.comp = 0.0;
-    const double sx = shear_x[i];
-    g.fz = std::max(0.0, s.fz_pressure) + s.fz_shear * sx;
-    const double arm = g.arm.cross(g.fx).dot(a);  // axle torque per unit x force at the patch
-    const double row_torque = arm * g.ax * sx;
-    const double soil_torque = -s.torque_shear * sx;  // the soil applies -axle_torque
-    // The compaction row acts at the wheel centre; its moment about the axle (at the patch) is
-    // added with last step's level.
-    base_torque[2 + i] += a * (soil_torque - row_torque + arm * compaction[i]);
+    g.cs = soil::ContactState{dp.depth, vx != 0.0 ? vx : 1e-12, vc.dot(g.fy), st.contact_vx[i],
+                              st.contact_vy[i]};
+    // First guess of the step's slip: eq 12 at the start of the step (see step()).
+    soil_terms(i, soil::slip_ratio(g.cs.vx, g.cs.vcx, opt.soil.eps_slip, opt.soil.slip_clamp_first));
   }
+}
+
+// Bekker–Wong (eqs 12–32) at slip s for wheel i, split into what ODE integrates implicitly and
+// the rest:
+// (a) the shear, whose regularisation tau -> sign(-v_c) min(|v_c|/eps_contact, 1) tau (eqs
+//     28–29) is a viscous law with a force cap: friction rows at the contact point with
+//     force-dependent slip (velocity = slip * force) and bounds +-F_sat;
+// (b) the compaction resistance -sign(v_x) rb int sigma sin (eq 30), whose regularised sign
+//     clamp(v_x / eps_direction) is the same kind of law on the wheel-centre velocity: a
+//     linear-motor row with CFM = eps_direction / F and bounds +-F;
+// (c) the normal force (eq 32, with the shear's normal part at last step's level) as the target
+//     of the contact's normal row, a damper that never pulls: F_n = max(0, F_z - c v_n);
+// (d) explicit: the share of the axle torque the rows do not produce, at last step's levels.
+// Treated explicitly, (a) and (b) are stiff dampers (~1e4 N s/m) unstable at any useful step.
+// The slip itself is chosen by step() so that it matches eq 12 at the end of the step.
+void RoverSim::Impl::soil_terms(int i, double slip) {
+  GroundContact& g = ground[i];
+  const soil::SoilSplit s = soil.split(g.cs, slip);
+  st.slip[i] = s.slip;
+  g.ax = std::max(s.fx_shear, 0.0);
+  g.ay = std::max(s.fy_shear, 0.0);
+  const double sign_vx = g.cs.vx > 0.0 ? 1.0 : -1.0;
+  g.comp = std::max(-s.fx_pressure * sign_vx, 0.0);  // rb int sigma sin theta (eq 30)
+  if (g.comp < kMinRowBound) g.comp = 0.0;
+  const double sx = shear_x[i];
+  g.fz = std::max(0.0, s.fz_pressure) + s.fz_shear * sx;
+  const Vec3& a = g.axle;
+  const double arm = g.arm.cross(g.fx).dot(a);  // axle torque per unit x force at the patch
+  const double row_torque = arm * g.ax * sx;
+  const double soil_torque = -s.torque_shear * sx;  // the soil applies -axle_torque
+  // The compaction row acts at the wheel centre; its moment about the axle (at the patch) is
+  // added with last step's level.
+  g.torque = a * (soil_torque - row_torque + arm * compaction[i]);
+}
+
+// Eq 12's inputs at the end of an attempt: the wheel centre's and the contact point's
+// longitudinal velocities ODE reached, in the step's contact frame.
+void RoverSim::Impl::end_velocity(int i, double& vx, double& vcx) const {
+  const GroundContact& g = ground[i];
+  const dBodyID wb = body[2 + i];
+  const Vec3 v = to_vec(dBodyGetLinearVel(wb));
+  const Vec3 vp = v + to_vec(dBodyGetAngularVel(wb)).cross(g.arm);
+  vx = v.dot(g.fx);
+  vcx = vp.dot(g.fx);
 }
 
 void RoverSim::Impl::near(dGeomID a, dGeomID b) {
@@ -261,6 +284,53 @@ void RoverSim::Impl::restore_bodies() {
   }
 }
 
+// One solve of the step at the current soil terms: the guessed rows (guess: in; next: where the
+// rows' laws put them; tried: the last guess emitted), retried as described in step(). Returns
+// whether a guess held (false: the rows were solved with their bounds, or guessing is off).
+bool RoverSim::Impl::solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess,
+                                std::array<std::int8_t, kGuessedRowCount>& next,
+                                std::array<std::int8_t, kGuessedRowCount>& tried, int& attempts) {
+  bool held = false;
+  while (opt.guess_active_set && !held && attempts < kMaxGuesses + kGuessedRowCount) {
+    if (attempts++ > 0) restore_bodies();
+    tried = guess;
+    emit(guess.data());
+    dWorldStep(world, opt.dt);
+    held = settle(guess.data(), next.data());
+    dJointGroupEmpty(contacts);
+    if (held) {
+      alternating = guess == row_mode_before && row_mode_before != row_mode;
+      break;
+    }
+    if (attempts == 1 && row_mode_before != row_mode) {  // the other of the last two outcomes
+      const auto& other = tried == row_mode_before ? row_mode : row_mode_before;
+      if (other != tried) {
+        guess = other;
+        continue;
+      }
+    }
+    for (int r = 0; r < kGuessedRowCount; ++r) {
+      if (attempts >= kMaxGuesses) {
+        guess[r] = tried[r] != kBounded && next[r] != tried[r] ? kBounded : tried[r];
+      } else {
+        // Where each row's law put it; a row that jumped from one bound to the other (its
+        // velocity changed sign within the step) is most likely between them.
+        const bool flipped = (tried[r] == kAtHi && next[r] == kAtLo) ||
+                             (tried[r] == kAtLo && next[r] == kAtHi);
+        guess[r] = flipped ? kFree : next[r];
+      }
+    }
+  }
+  if (!held) {  // guessing off (or, never seen, no progress): every row with its bounds
+    if (attempts++ > 0) restore_bodies();
+    emit(nullptr);
+    dWorldStep(world, opt.dt);
+    settle(nullptr, next.data());
+    dJointGroupEmpty(contacts);
+  }
+  return held;
+}
+
 void RoverSim::Impl::step() {
   if (diverged)
     throw SimulationDiverged("RoverSim: the simulation diverged earlier; restore() or reset() first");
@@ -292,44 +362,66 @@ void RoverSim::Impl::step() {
   const bool chatter = alternating && row_mode_before != row_mode;
   std::array<std::int8_t, kGuessedRowCount> guess = chatter ? row_mode_before : row_mode;
   std::array<std::int8_t, kGuessedRowCount> next = guess, tried = guess;
-  int attempts = 0;
-  bool held = false;
   alternating = false;
   const std::uint64_t lcp_messages = ode_lcp_messages;
   const detail::LcpScope lcp_scope(&lcp);
-  while (opt.guess_active_set && !held && attempts < kMaxGuesses + kGuessedRowCount) {
-    if (attempts++ > 0) restore_bodies();
-    tried = guess;
-    emit(guess.data());
-    dWorldStep(world, opt.dt);
-    held = settle(guess.data(), next.data());
-    dJointGroupEmpty(contacts);
-    if (held) {
-      alternating = guess == row_mode_before && row_mode_before != row_mode;
-      break;
+
+  // Implicit slip (backward Euler in eq 12). Where the wheel centre barely moves the slip is a
+  // steep function of its velocity (on the eps_slip^-1/2 = 1 cm/s scale of eq 12's factor; see
+  // SoilParameters::slip_clamp_first), and the soil's force changes by ~150 N between s = 0 and
+  // s = -1: as a damper ~1e4 N s/m per wheel. With the slip taken from the start of the step
+  // (explicit) that turns into a period-2 chatter at every usable step, whose mean creep moves
+  // with the step (benchmarks/RESULTS.md, "step independence"). So a step is solved with slips
+  // sigma (one per wheel) and accepted when eq 12 at its end velocities gives back sigma within
+  // kSlipTolerance. The wheels share the chassis, so the residual r(sigma) = s_end - sigma
+  // couples them: Broyden's method on the four slips from J = -I (the first update is the
+  // fixed-point step, eq 12 at the end), clamped to [-1, 1]. After kMaxSlipSolves solves the
+  // step is solved once more at the best slips seen.
+  const bool soft = opt.ground == GroundType::Soil;
+  Eigen::Vector4d sigma, best_sigma, res, prev_sigma, prev_res;
+  for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
+  Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
+  double best = std::numeric_limits<double>::infinity();
+  bool held = false;
+  int attempts = 0;
+  for (int solve = 0;; ++solve) {
+    if (solve > 0) {
+      restore_bodies();
+      for (int i = 0; i < 4; ++i)
+        if (ground[i].active) soil_terms(i, sigma[i]);
+      guess = next;
+      ++stats.slip_solves;
     }
-    if (attempts == 1 && row_mode_before != row_mode) {
-      guess = chatter ? row_mode : row_mode_before;
+    attempts = 0;
+    held = solve_rows(guess, next, tried, attempts);
+    if (!soft || solve > kMaxSlipSolves) break;
+    for (int i = 0; i < 4; ++i) {
+      double vx = 0.0, vcx = 0.0;
+      if (ground[i].active) end_velocity(i, vx, vcx);
+      res[i] = ground[i].active ? soil::slip_ratio(vx, vcx, opt.soil.eps_slip, opt.soil.slip_clamp_first) - sigma[i] : 0.0;
+    }
+    const double worst = res.cwiseAbs().maxCoeff();
+    if (worst <= kSlipTolerance) break;
+    if (worst < best) {
+      best = worst;
+      best_sigma = sigma;
+    }
+    if (solve == kMaxSlipSolves - 1) {  // out of solves: the best seen, once more
+      sigma = best_sigma;
       continue;
     }
-    for (int r = 0; r < kGuessedRowCount; ++r) {
-      if (attempts >= kMaxGuesses) {
-        guess[r] = tried[r] != kBounded && next[r] != tried[r] ? kBounded : tried[r];
-      } else {
-        // Where each row's law put it; a row that jumped from one bound to the other (its
-        // velocity changed sign within the step) is most likely between them.
-        const bool flipped = (tried[r] == kAtHi && next[r] == kAtLo) ||
-                             (tried[r] == kAtLo && next[r] == kAtHi);
-        guess[r] = flipped ? kFree : next[r];
-      }
+    if (solve == kMaxSlipSolves) break;
+    if (solve > 0) {  // Broyden's rank-one update with the last step of sigma
+      const Eigen::Vector4d ds = sigma - prev_sigma, dr = res - prev_res;
+      const double n2 = ds.squaredNorm();
+      if (n2 > 0.0) jac += (dr - jac * ds) * ds.transpose() / n2;
     }
-  }
-  if (!held) {  // guessing off (or, never seen, no progress): every row with its bounds
-    if (attempts++ > 0) restore_bodies();
-    emit(nullptr);
-    dWorldStep(world, opt.dt);
-    settle(nullptr, next.data());
-    dJointGroupEmpty(contacts);
+    prev_sigma = sigma;
+    prev_res = res;
+    Eigen::Vector4d step = jac.partialPivLu().solve(-res);
+    if (!step.allFinite()) step = res;  // singular: the fixed-point step
+    for (int i = 0; i < 4; ++i)
+      sigma[i] = ground[i].active ? std::clamp(sigma[i] + step[i], -1.0, 1.0) : sigma[i];
   }
   row_mode_before = row_mode;
   row_mode = next;

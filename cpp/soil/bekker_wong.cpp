@@ -71,7 +71,7 @@ void WheelGeometry::validate() const {
   require_in_range("WheelGeometry", "width", width, 1e-3, 10.0);
 }
 
-double slip_ratio(double vx, double vcx, double eps_slip) {
+double slip_ratio(double vx, double vcx, double eps_slip, bool clamp_first) {
   // eq 12: driving vs braking decided by the directions of v_cx and v_x, not by |r w| vs |v_x|;
   // (1 - exp(-eps v_x^2)) takes s smoothly to 0 as longitudinal motion stops.
   const double reg = -std::expm1(-eps_slip * vx * vx);
@@ -80,7 +80,7 @@ double slip_ratio(double vx, double vcx, double eps_slip) {
     const double den = vcx - vx;
     s = den != 0.0 ? vcx / den * reg : 0.0;
   } else {
-    s = -vcx / vx * reg;
+    s = clamp_first ? -std::min(vcx / vx, 1.0) * reg : -vcx / vx * reg;
   }
   return clamp_unit(s);
 }
@@ -104,7 +104,8 @@ BekkerWongModel::BekkerWongModel(const SoilParameters& soil, const WheelGeometry
   d2_ = phi > 0.0 ? cot_xc + cot_xc * cot_xc * tan_phi_ : cot_xc;  // eq 26: cot^2 Xc / cot phi
 }
 
-SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const {
+SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
+                                     const double* slip) const {
   const char* o = "ContactState";
   require_finite(o, "sinkage", st.sinkage);
   require_finite(o, "vx", st.vx);
@@ -115,7 +116,8 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
   const SoilParameters& p = soil_;
   const double r = wheel_.radius, b = wheel_.width;
   SoilSplit out;
-  const double s = slip_ratio(st.vx, st.vcx, p.eps_slip);  // eq 12
+  if (slip) require_finite("BekkerWongModel::split", "slip", *slip);
+  const double s = slip ? clamp_unit(*slip) : slip_ratio(st.vx, st.vcx, p.eps_slip, p.slip_clamp_first);  // eq 12
   out.slip = s;
   if (!(st.sinkage > 0.0)) return out;  // above the ground: no force
 
@@ -228,14 +230,20 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral) const
   return out;
 }
 
-SoilSplit BekkerWongModel::split(const ContactState& state) const { return integrate(state, true); }
+SoilSplit BekkerWongModel::split(const ContactState& state) const {
+  return integrate(state, true, nullptr);
+}
+
+SoilSplit BekkerWongModel::split(const ContactState& state, double slip) const {
+  return integrate(state, true, &slip);
+}
 
 WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {
   const SoilParameters& p = soil_;
   // eqs 28–29: shear opposes the contact velocity, scaled to 0 below eps_contact.
   const double sx = clamp_unit(-st.vcx / p.eps_contact_x);
   const double sy = clamp_unit(-st.vcy / p.eps_contact_y);
-  const SoilSplit t = integrate(st, sy != 0.0);
+  const SoilSplit t = integrate(st, sy != 0.0, nullptr);
   WheelSoilForce out;
   out.slip = t.slip;
   out.theta_f = t.theta_f;

@@ -70,6 +70,10 @@ class BekkerWongModel {
 
   /// The parts of evaluate() in one pass over the contact patch (see SoilSplit).
   SoilSplit split(const ContactState& state) const;
+  /// split() with the slip ratio given instead of computed from eq 12 (clamped to [-1, 1]). The
+  /// simulator solves eq 12 implicitly, at the velocities of the end of its step, so it chooses
+  /// the slip and checks it against eq 12 afterwards (cpp/dynamics/rover_step.cpp).
+  SoilSplit split(const ContactState& state, double slip) const;
 
   /// Batch evaluation for the simulator's hot loop. `states` rows are
   /// (sinkage, vx, vy, vcx, vcy); `forces` rows receive (fx, fy, fz, axle_torque).
@@ -81,7 +85,7 @@ class BekkerWongModel {
   int points_per_panel() const { return static_cast<int>(nodes_.size()); }
 
  private:
-  SoilSplit integrate(const ContactState& state, bool lateral) const;
+  SoilSplit integrate(const ContactState& state, bool lateral, const double* slip) const;
 
   SoilParameters soil_;
   WheelGeometry wheel_;
@@ -91,6 +95,7 @@ class BekkerWongModel {
 };
 
 /// Slip ratio of eq 12 (regularised, clamped to [-1, 1]); exposed for tests and the rig.
-double slip_ratio(double vx, double vcx, double eps_slip);
+/// clamp_first: SoilParameters::slip_clamp_first (ours, default) or the printed order (false).
+double slip_ratio(double vx, double vcx, double eps_slip, bool clamp_first = true);
 
 }  // namespace ernest::soil

@@ -26,6 +26,16 @@ struct SoilParameters {
   /// Ours, not the paper's: sign(v_x) in eqs 30 and 32 is replaced by clamp(v_x/eps, -1, 1) so
   /// forces stay continuous when v_x crosses zero while the wheel spins. 0 gives the paper's sign.
   double eps_direction = 0.01;
+  /// Ours, not the paper's: in eq 12's braking branch the ratio -v_cx / v_x is clamped to
+  /// [-1, 0] before the regularisation factor (1 - exp(-eps_slip v_x^2)) multiplies it, as the
+  /// driving branch's ratio v_cx / (v_cx - v_x) already is by its form. Then both branches go to
+  /// 0 on the same velocity scale eps_slip^-1/2, as §3.3 says the factor is for. Printed (false:
+  /// clamped after), a wheel spinning at |v_cx| while its centre drifts back has
+  /// s ~ -eps_slip |v_cx| |v_x|: at ERNEST's 0.2 m/s and eps_slip 1e4, s reaches -1 within
+  /// 0.5 mm/s of v_x and the soil force jumps by ~150 N, a law too steep for the simulator's
+  /// step to resolve (benchmarks/RESULTS.md, "step independence"). Identical whenever
+  /// |v_cx| <= |v_x| or |v_x| >> eps_slip^-1/2.
+  bool slip_clamp_first = true;
   double gravity = 9.81;                   ///< [m/s^2], turns rho into unit weight in eq 24
 
   /// Throws std::invalid_argument naming the first field outside its allowed range.

@@ -133,6 +133,7 @@ class SolverStats:
     lcp_errors: int
     sparse_solves: int
     dense_solves: int
+    slip_solves: int
 
 class Commands:
     wheel_speed: list[float]

@@ -29,7 +29,8 @@ inline std::array<double, 4> evaluate(const SoilParameters& p, const WheelGeomet
   if (st.vcx * st.vx <= 0.0) {
     s = (st.vcx - st.vx) != 0.0 ? st.vcx / (st.vcx - st.vx) * reg : 0.0;
   } else {
-    s = -st.vcx / st.vx * reg;
+    // SoilParameters::slip_clamp_first (ours): the braking ratio clamped before the factor
+    s = p.slip_clamp_first ? -std::min(st.vcx / st.vx, 1.0) * reg : -st.vcx / st.vx * reg;
   }
   s = std::clamp(s, -1.0, 1.0);
   const double tf = std::acos(1.0 - h / r);                                          // eq 13

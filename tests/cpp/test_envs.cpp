@@ -234,6 +234,8 @@ TEST(Scenarios, EvaluationCourses) {
   EXPECT_NEAR(std::atan(slope.peak_slope), 20 * kDeg, 1e-12);
   EXPECT_FALSE(slope.slope_direct);
   EXPECT_NEAR((slope.terrain.height(6.0, 0) - slope.terrain.height(5.0, 0)), std::tan(20 * kDeg), 1e-9);
+  // the whole rover (wheelbase 0.86 m around x = 0) starts on the constant slope
+  EXPECT_NEAR((slope.terrain.height(0.5, 0) - slope.terrain.height(-0.5, 0)), std::tan(20 * kDeg), 1e-9);
   const Scenario step = make(ScenarioKind::WheelStep, 0);
   EXPECT_DOUBLE_EQ(step.step_height, 0.34);  // wheel diameter (Table 1)
   const Scenario trap = make(ScenarioKind::BicklerTrap, 0);

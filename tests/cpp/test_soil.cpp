@@ -96,6 +96,24 @@ TEST(BekkerWong, SlipRatioMatchesTextbookDefinitions) {
   EXPECT_NEAR(slip_ratio(0.1, 0.1 - 0.2, 100.0), 0.5 * (1.0 - std::exp(-1.0)), 1e-12);
 }
 
+// SoilParameters::slip_clamp_first (ours): eq 12's factor 1 - exp(-eps v_x^2) bounds |s| on
+// both branches, so s goes to 0 on the scale eps^-1/2 whatever v_cx; as printed, the braking
+// branch of a wheel spinning at 0.2 m/s reaches -1 within 0.5 mm/s of v_x (eps 1e4).
+TEST(BekkerWong, SlipClampFirstRegularisesBothBranchesOnOneScale) {
+  const double eps = 1e4;
+  for (double vx : {-0.02, -0.005, -0.001, -1e-4, 1e-4, 0.001, 0.005, 0.02}) {
+    const double bound = 1.0 - std::exp(-eps * vx * vx);
+    for (double vcx : {-0.3, -0.2, -0.01, 0.0, 0.01, 0.2, 0.3}) {
+      EXPECT_LE(std::abs(slip_ratio(vx, vcx, eps)), bound + 1e-15) << vx << " " << vcx;
+      // identical to the printed order when the ratio is within [-1, 1]
+      if (vcx * vx > 0.0 && std::abs(vcx) <= std::abs(vx))
+        EXPECT_DOUBLE_EQ(slip_ratio(vx, vcx, eps), slip_ratio(vx, vcx, eps, false));
+    }
+  }
+  EXPECT_DOUBLE_EQ(slip_ratio(-0.001, -0.2, eps, false), -1.0);  // printed: already saturated
+  EXPECT_NEAR(slip_ratio(-0.001, -0.2, eps), -(1.0 - std::exp(-0.01)), 1e-15);
+}
+
 TEST(BekkerWong, AgreesWithIndependentAdaptiveQuadrature) {
   // Driving or rolling (s >= 0): every kink of the integrands is a panel boundary, so 24 points
   // per panel must match adaptive Gauss–Kronrod to 2e-4 of F_z. Braking (s < 0): |j_x| of eq 19
