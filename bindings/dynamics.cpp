@@ -159,6 +159,9 @@ void bind_dynamics(py::module_& m) {
                      "solver (same solution to rounding); False: ODE's solver for every step")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
+      .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,
+                     "implicit slip [N]: accepted change of the soil forces between the slip "
+                     "used and eq 12's at the step's end; 1e9 = explicit (chatters)")
       .def("validate", &SimOptions::validate, "Raise ValueError naming an invalid field.");
 
   py::class_<Commands>(m, "Commands",

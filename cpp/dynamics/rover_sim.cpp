@@ -161,6 +161,7 @@ void SimOptions::validate() const {
   require_in_range(o, "rigid_slip", rigid_slip, 0.0, 1.0);
   require_in_range(o, "max_speed", max_speed, 1e-3, 1e6);
   require_in_range(o, "max_angular_speed", max_angular_speed, 1e-3, 1e7);
+  require_in_range(o, "slip_force_tolerance", slip_force_tolerance, 1e-6, 1e9);
 }
 
 void Commands::validate() const {
@@ -358,6 +359,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   shear_x.fill(0.0);
   shear_y.fill(0.0);
   compaction.fill(0.0);
+  slip_response.setZero();
   row_mode.fill(kFree);
   row_mode_before.fill(kFree);
   alternating = false;
@@ -487,6 +489,7 @@ Snapshot RoverSim::snapshot() const {
   s.shear_x = impl_->shear_x;
   s.shear_y = impl_->shear_y;
   s.compaction = impl_->compaction;
+  std::copy(impl_->slip_response.data(), impl_->slip_response.data() + 32, s.slip_response.begin());
   s.row_mode = impl_->row_mode;
   s.row_mode_before = impl_->row_mode_before;
   s.alternating = impl_->alternating;
@@ -515,6 +518,7 @@ void RoverSim::restore(const Snapshot& s) {
   impl_->shear_x = s.shear_x;
   impl_->shear_y = s.shear_y;
   impl_->compaction = s.compaction;
+  std::copy(s.slip_response.begin(), s.slip_response.end(), impl_->slip_response.data());
   impl_->row_mode = s.row_mode;
   impl_->row_mode_before = s.row_mode_before;
   impl_->alternating = s.alternating;

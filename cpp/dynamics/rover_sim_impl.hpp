@@ -67,10 +67,7 @@ constexpr int kMaxGuesses = 3;       // guesses of a step before failing rows ar
 constexpr double kMinRowBound = 1e-3;
 constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
 constexpr double kStickMargin = 0.8;   // rigid friction above 0.8 mu F_n: solved bounded next step
-// Implicit slip (rover_step.cpp): a step is accepted when every wheel's slip ratio of eq 12 at
-// the end-of-step velocities is within kSlipTolerance of the slip the step used; at most
-// kMaxSlipSolves solves of the step per step.
-constexpr double kSlipTolerance = 2e-3;
+// Implicit slip (rover_step.cpp): at most kMaxSlipSolves solves of a step for its slip.
 constexpr int kMaxSlipSolves = 12;
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
@@ -142,6 +139,9 @@ struct RoverSim::Impl {
   RoverState st{};
   // Implicit levels reached last step, used by this step's explicit terms; and the row guesses.
   std::array<double, 4> shear_x{}, shear_y{}, compaction{};
+  // d(end-of-step v_x, v_cx of each wheel) / d(slip used), Broyden's estimate carried from
+  // step to step (the implicit slip, rover_step.cpp).
+  Eigen::Matrix<double, 8, 4> slip_response = Eigen::Matrix<double, 8, 4>::Zero();
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
   std::array<bool, 2> stop_set{};  // the gimbal's yaw / roll stop is set (prepare_actuators)
@@ -192,7 +192,12 @@ struct RoverSim::Impl {
                      Vec3& ea) const;
   void prepare_actuators(double psi, double phi);
   void prepare_ground();
+  struct SoilTerms {
+    double slip = 0.0, ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0, axle_torque = 0.0;
+  };
+  SoilTerms soil_terms_at(int wheel, double slip) const;
   void soil_terms(int wheel, double slip);
+  double soil_terms_gap(int wheel, double end_slip) const;
   void end_velocity(int wheel, double& vx, double& vcx) const;
   bool solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess,
                   std::array<std::int8_t, kGuessedRowCount>& next,

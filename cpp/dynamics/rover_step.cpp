@@ -183,24 +183,47 @@ void RoverSim::Impl::prepare_ground() {
 // (d) explicit: the share of the axle torque the rows do not produce, at last step's levels.
 // Treated explicitly, (a) and (b) are stiff dampers (~1e4 N s/m) unstable at any useful step.
 // The slip itself is chosen by step() so that it matches eq 12 at the end of the step.
-void RoverSim::Impl::soil_terms(int i, double slip) {
-  GroundContact& g = ground[i];
+RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) const {
+  const GroundContact& g = ground[i];
   const soil::SoilSplit s = soil.split(g.cs, slip);
-  st.slip[i] = s.slip;
-  g.ax = std::max(s.fx_shear, 0.0);
-  g.ay = std::max(s.fy_shear, 0.0);
+  SoilTerms t;
+  t.slip = s.slip;
+  t.ax = std::max(s.fx_shear, 0.0);
+  t.ay = std::max(s.fy_shear, 0.0);
   const double sign_vx = g.cs.vx > 0.0 ? 1.0 : -1.0;
-  g.comp = std::max(-s.fx_pressure * sign_vx, 0.0);  // rb int sigma sin theta (eq 30)
-  if (g.comp < kMinRowBound) g.comp = 0.0;
+  t.comp = std::max(-s.fx_pressure * sign_vx, 0.0);  // rb int sigma sin theta (eq 30)
+  if (t.comp < kMinRowBound) t.comp = 0.0;
   const double sx = shear_x[i];
-  g.fz = std::max(0.0, s.fz_pressure) + s.fz_shear * sx;
-  const Vec3& a = g.axle;
-  const double arm = g.arm.cross(g.fx).dot(a);  // axle torque per unit x force at the patch
-  const double row_torque = arm * g.ax * sx;
+  t.fz = std::max(0.0, s.fz_pressure) + s.fz_shear * sx;
+  const double arm = g.arm.cross(g.fx).dot(g.axle);  // axle torque per unit x force at the patch
+  const double row_torque = arm * t.ax * sx;
   const double soil_torque = -s.torque_shear * sx;  // the soil applies -axle_torque
   // The compaction row acts at the wheel centre; its moment about the axle (at the patch) is
   // added with last step's level.
-  g.torque = a * (soil_torque - row_torque + arm * compaction[i]);
+  t.axle_torque = soil_torque - row_torque + arm * compaction[i];
+  return t;
+}
+
+void RoverSim::Impl::soil_terms(int i, double slip) {
+  GroundContact& g = ground[i];
+  const SoilTerms t = soil_terms_at(i, slip);
+  st.slip[i] = t.slip;
+  g.ax = t.ax;
+  g.ay = t.ay;
+  g.comp = t.comp;
+  g.fz = t.fz;
+  g.torque = g.axle * t.axle_torque;
+}
+
+// How far the soil terms of the step (at the slip it used) are from those at the slip eq 12
+// gives at its end: the largest change of a row bound or explicit force [N], axle torques
+// counted as forces at the wheel radius.
+double RoverSim::Impl::soil_terms_gap(int i, double end_slip) const {
+  const GroundContact& g = ground[i];
+  const SoilTerms t = soil_terms_at(i, end_slip);
+  const double torque_now = g.torque.dot(g.axle);
+  return std::max({std::abs(t.ax - g.ax), std::abs(t.ay - g.ay), std::abs(t.comp - g.comp),
+                   std::abs(t.fz - g.fz), std::abs(t.axle_torque - torque_now) / p.wheel_radius});
 }
 
 // Eq 12's inputs at the end of an attempt: the wheel centre's and the contact point's
@@ -372,18 +395,29 @@ void RoverSim::Impl::step() {
   // s = -1: as a damper ~1e4 N s/m per wheel. With the slip taken from the start of the step
   // (explicit) that turns into a period-2 chatter at every usable step, whose mean creep moves
   // with the step (benchmarks/RESULTS.md, "step independence"). So a step is solved with slips
-  // sigma (one per wheel) and accepted when eq 12 at its end velocities gives back sigma within
-  // kSlipTolerance. The wheels share the chassis, so the residual r(sigma) = s_end - sigma
-  // couples them: Broyden's method on the four slips from J = -I (the first update is the
-  // fixed-point step, eq 12 at the end), clamped to [-1, 1]. After kMaxSlipSolves solves the
-  // step is solved once more at the best slips seen.
+  // sigma (one per wheel) and accepted when eq 12 at its end velocities gives back sigma, to
+  // within SimOptions::slip_force_tolerance of the soil forces the slip sets (soil_terms_gap:
+  // a slip error where the forces do not depend on it costs no solve). The wheels share the
+  // chassis, so the residual
+  // r(sigma) = s_end - sigma couples them. Newton's method on the four slips with
+  // J = (d s_end / d v) B - I: the steep part, eq 12's derivative at the end velocities, is
+  // exact, and B = d v / d sigma (each wheel's v_x and v_cx at the end of the step against the
+  // slips used: smooth, set by the rover's masses and the soil's slip sensitivity) is Broyden's
+  // estimate, carried from step to step (slip_response; 0 at first, when the first update is the
+  // fixed-point step, eq 12 at the end). Slips are clamped to [-1, 1]. After kMaxSlipSolves
+  // solves the step is solved once more at the best slips seen.
   const bool soft = opt.ground == GroundType::Soil;
-  Eigen::Vector4d sigma, best_sigma, res, prev_sigma, prev_res;
+  using Vec8 = Eigen::Matrix<double, 8, 1>;
+  Eigen::Vector4d sigma, best_sigma, res, prev_sigma;
+  Vec8 vend, prev_v;
   for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
-  Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
+  Eigen::Matrix<double, 8, 4>& bmat = slip_response;
   double best = std::numeric_limits<double>::infinity();
   bool held = false;
   int attempts = 0;
+  const auto eq12 = [&](double vx, double vcx) {
+    return soil::slip_ratio(vx, vcx, opt.soil.eps_slip, opt.soil.slip_clamp_first);
+  };
   for (int solve = 0;; ++solve) {
     if (solve > 0) {
       restore_bodies();
@@ -395,13 +429,25 @@ void RoverSim::Impl::step() {
     attempts = 0;
     held = solve_rows(guess, next, tried, attempts);
     if (!soft || solve > kMaxSlipSolves) break;
+    double worst = 0.0;  // [N]: the implicit-slip error as a force (soil_terms_gap)
+    vend.setZero();
     for (int i = 0; i < 4; ++i) {
-      double vx = 0.0, vcx = 0.0;
-      if (ground[i].active) end_velocity(i, vx, vcx);
-      res[i] = ground[i].active ? soil::slip_ratio(vx, vcx, opt.soil.eps_slip, opt.soil.slip_clamp_first) - sigma[i] : 0.0;
+      res[i] = 0.0;
+      if (!ground[i].active) continue;
+      end_velocity(i, vend[2 * i], vend[2 * i + 1]);
+      const double s_end = eq12(vend[2 * i], vend[2 * i + 1]);
+      res[i] = s_end - sigma[i];
+      if (res[i] != 0.0) worst = std::max(worst, soil_terms_gap(i, s_end));
     }
-    const double worst = res.cwiseAbs().maxCoeff();
-    if (worst <= kSlipTolerance) break;
+    if (solve > 0) {  // Broyden's rank-one update of B with the last change of sigma
+      const Eigen::Vector4d ds = sigma - prev_sigma;
+      const double n2 = ds.squaredNorm();
+      if (n2 > 0.0) bmat += (vend - prev_v - bmat * ds) * ds.transpose() / n2;
+    }
+    // The tolerance doubles with every solve past the second: where the step's active set
+    // changes with the slips (a row reaching its bound), the map from slips to end velocities
+    // has kinks on which Newton's method can cycle; this bounds the cost of such steps.
+    if (worst <= std::ldexp(opt.slip_force_tolerance, std::max(0, solve - 2))) break;
     if (worst < best) {
       best = worst;
       best_sigma = sigma;
@@ -411,18 +457,23 @@ void RoverSim::Impl::step() {
       continue;
     }
     if (solve == kMaxSlipSolves) break;
-    if (solve > 0) {  // Broyden's rank-one update with the last step of sigma
-      const Eigen::Vector4d ds = sigma - prev_sigma, dr = res - prev_res;
-      const double n2 = ds.squaredNorm();
-      if (n2 > 0.0) jac += (dr - jac * ds) * ds.transpose() / n2;
-    }
     prev_sigma = sigma;
-    prev_res = res;
+    prev_v = vend;
+    Eigen::Matrix<double, 4, 8> dsdv = Eigen::Matrix<double, 4, 8>::Zero();
+    constexpr double h = 1e-7;  // [m/s] central differences of eq 12
+    for (int i = 0; i < 4; ++i) {
+      if (!ground[i].active) continue;
+      const double vx = vend[2 * i], vcx = vend[2 * i + 1];
+      dsdv(i, 2 * i) = (eq12(vx + h, vcx) - eq12(vx - h, vcx)) / (2 * h);
+      dsdv(i, 2 * i + 1) = (eq12(vx, vcx + h) - eq12(vx, vcx - h)) / (2 * h);
+    }
+    const Eigen::Matrix4d jac = dsdv * bmat - Eigen::Matrix4d::Identity();
     Eigen::Vector4d step = jac.partialPivLu().solve(-res);
     if (!step.allFinite()) step = res;  // singular: the fixed-point step
     for (int i = 0; i < 4; ++i)
       sigma[i] = ground[i].active ? std::clamp(sigma[i] + step[i], -1.0, 1.0) : sigma[i];
   }
+  if (!bmat.allFinite()) bmat.setZero();
   row_mode_before = row_mode;
   row_mode = next;
   ++stats.steps;

@@ -122,6 +122,7 @@ class SimOptions:
     sparse_lcp: bool
     max_speed: float
     max_angular_speed: float
+    slip_force_tolerance: float
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
