@@ -299,7 +299,6 @@ void bind_opt(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("solver", &TransitionOptions::solver)
       .def_readwrite("waypoints", &TransitionOptions::waypoints)
-      .def_readwrite("constraint_samples", &TransitionOptions::constraint_samples)
       .def_readwrite("min_duration", &TransitionOptions::min_duration)
       .def_readwrite("max_duration", &TransitionOptions::max_duration)
       .def_readwrite("duration_scale", &TransitionOptions::duration_scale)
@@ -362,6 +361,13 @@ void bind_opt(py::module_& m) {
                                                         double& ddq) { r.evaluate(j, t, q, dq, ddq); });
            },
            "tau"_a, "(q, dq, ddq) of the transition at tau in [0, T] after t1.")
+      .def("peaks",
+           [](const TransitionResult& r) {
+             Eigen::VectorXd q(r.joints()), v(r.joints());
+             for (int j = 0; j < r.joints(); ++j) r.peaks(j, q[j], v[j]);
+             return py::make_tuple(q, v);
+           },
+           "(max |q|, max |dq/dt|) per joint over the transition, from the analytic extrema.")
       .def("sample_executed",
            [](const TransitionResult& r, const TransitionProblem& problem,
               const Eigen::VectorXd& times) {
