@@ -308,6 +308,7 @@ void bind_opt(py::module_& m) {
       .def_readwrite("linear_scale", &TransitionOptions::linear_scale)
       .def_readwrite("initial_durations", &TransitionOptions::initial_durations)
       .def_readwrite("initial_phases", &TransitionOptions::initial_phases)
+      .def_readwrite("limit_margin", &TransitionOptions::limit_margin)
       .def_readwrite("feasibility_tol", &TransitionOptions::feasibility_tol)
       .def_readwrite("fallback", &TransitionOptions::fallback)
       .def_readwrite("integration", &TransitionOptions::integration)

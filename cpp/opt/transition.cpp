@@ -84,6 +84,7 @@ void TransitionOptions::validate() const {
   require_positive(o, "linear_scale", linear_scale);
   require_in_range(o, "initial_durations", initial_durations, 1, 1000);
   require_in_range(o, "initial_phases", initial_phases, 1, 1000);
+  require_in_range(o, "limit_margin", limit_margin, 0.0, 0.1);
   require_in_range(o, "feasibility_tol", feasibility_tol, 0.0, 1.0);
   integration.validate();
 }
@@ -463,8 +464,8 @@ class TransitionCost {
       const Peak pos = peak(j, 0), vel = peak(j, 1);
       const double P = pb_.position_limit[j], V = pb_.velocity_limit[j];
       const double vq = std::abs(pos.value), vv = std::abs(vel.value);
-      c[row] = vq / P - 1.0;
-      c[row + 1] = vv / (V * T_) - 1.0;
+      c[row] = vq / P - (1.0 - o_.limit_margin);
+      c[row + 1] = vv / (V * T_) - (1.0 - o_.limit_margin);
       if (jac) {
         SplineStencil st;
         clear_grad();
@@ -515,12 +516,13 @@ class TransitionCost {
     return std::isfinite(worst) ? worst : kInf;
   }
 
-  // Feasibility of x: the exact limit violation, eq 17's rows (normalised by T) and the bounds.
+  // Feasibility of x: the exact rows (with the margin), eq 17's rows (normalised by T), bounds.
   double max_violation(const std::vector<double>& x, const std::vector<double>& lo,
                        const std::vector<double>& hi) {
     std::vector<double> c(m_);
     constraints(x.data(), c.data(), nullptr);
-    double worst = limit_violation(x);
+    double worst = -kInf;
+    for (int r = 0; r < 2 * nj_; ++r) worst = std::max(worst, std::isfinite(c[r]) ? c[r] : kInf);
     for (int r = 2 * nj_; r < m_; ++r) worst = std::max(worst, std::isfinite(c[r]) ? c[r] / T_ : kInf);
     for (int i = 0; i < dim_; ++i) {
       worst = std::max(worst, lo[i] - x[i]);
@@ -694,11 +696,18 @@ TransitionResult optimise(const TransitionProblem& problem, Strategy strategy,
     os << "SLSQP point infeasible (max violation " << viol << ", status " << sr.status_name << ")";
     throw std::runtime_error(os.str());
   }
+  const double limits = cost.limit_violation(sr.x);
+  if (!(limits <= 0.0)) {
+    std::ostringstream os;
+    os << "SLSQP point exceeds a joint limit (exact normalised violation " << limits
+       << ", status " << sr.status_name << ")";
+    throw std::runtime_error(os.str());
+  }
   if (sr.status < 0 && sr.status != NLOPT_ROUNDOFF_LIMITED)
     throw std::runtime_error("SLSQP failed with status " + sr.status_name);
   TransitionResult r = cost.build(sr.x, f);
   r.solver = sr;
-  r.max_violation = cost.limit_violation(sr.x);
+  r.max_violation = limits;
   return r;
 }
 

@@ -55,7 +55,11 @@ struct TransitionOptions {
   double linear_scale = 0.1;       ///< [rad]
   int initial_durations = 10;      ///< grid of the initial search over (T, end phase)
   int initial_phases = 24;
-  double feasibility_tol = 1e-6;   ///< accepted normalised constraint violation
+  /// SLSQP sees the joint limits tightened by this fraction (exact rows: |q| / P <= 1 - margin):
+  /// its converged point is feasible only to its own constraint_tol, and the returned transition
+  /// must never exceed the true limits (it is rejected if it does).
+  double limit_margin = 1e-7;
+  double feasibility_tol = 1e-6;   ///< accepted normalised violation of eq 17's rows and the bounds
   bool fallback = true;            ///< on failure use Naive (reason reported) instead of throwing
   IntegrationOptions integration{1e-9, 1e-8, 200000};
   void validate() const;
