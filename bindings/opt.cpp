@@ -299,7 +299,6 @@ void bind_opt(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("solver", &TransitionOptions::solver)
       .def_readwrite("waypoints", &TransitionOptions::waypoints)
-      .def_readwrite("constraint_samples", &TransitionOptions::constraint_samples)
       .def_readwrite("min_duration", &TransitionOptions::min_duration)
       .def_readwrite("max_duration", &TransitionOptions::max_duration)
       .def_readwrite("duration_scale", &TransitionOptions::duration_scale)
@@ -309,6 +308,7 @@ void bind_opt(py::module_& m) {
       .def_readwrite("linear_scale", &TransitionOptions::linear_scale)
       .def_readwrite("initial_durations", &TransitionOptions::initial_durations)
       .def_readwrite("initial_phases", &TransitionOptions::initial_phases)
+      .def_readwrite("limit_margin", &TransitionOptions::limit_margin)
       .def_readwrite("feasibility_tol", &TransitionOptions::feasibility_tol)
       .def_readwrite("fallback", &TransitionOptions::fallback)
       .def_readwrite("integration", &TransitionOptions::integration)
@@ -362,6 +362,13 @@ void bind_opt(py::module_& m) {
                                                         double& ddq) { r.evaluate(j, t, q, dq, ddq); });
            },
            "tau"_a, "(q, dq, ddq) of the transition at tau in [0, T] after t1.")
+      .def("peaks",
+           [](const TransitionResult& r) {
+             Eigen::VectorXd q(r.joints()), v(r.joints());
+             for (int j = 0; j < r.joints(); ++j) r.peaks(j, q[j], v[j]);
+             return py::make_tuple(q, v);
+           },
+           "(max |q|, max |dq/dt|) per joint over the transition, from the analytic extrema.")
       .def("sample_executed",
            [](const TransitionResult& r, const TransitionProblem& problem,
               const Eigen::VectorXd& times) {

@@ -86,7 +86,7 @@ void Gait::check_limits(const Eigen::VectorXd& position_limit,
 Gait squirming(const AsterixParameters& p) {
   p.validate();
   return Gait("squirming", 8.0, Eigen::Vector2d(0.0, 0.0),
-              Eigen::Vector2d(0.92 * p.steering_limit, 0.0), Eigen::Vector2d(0.0, 0.0));
+              Eigen::Vector2d(0.92 * p.steering_limit, 0.0), Eigen::Vector2d(0.5 * M_PI, 0.0));
 }
 
 Gait wheel_walking(const AsterixParameters& p) {
@@ -94,7 +94,7 @@ Gait wheel_walking(const AsterixParameters& p) {
   return Gait("wheel_walking", 10.0, Eigen::Vector2d(0.0, 0.0),
               Eigen::Vector2d(std::min(0.35, 0.9 * p.steering_limit),
                               std::min(0.30, 0.9 * p.roll_limit)),
-              Eigen::Vector2d(0.0, 0.5 * M_PI));
+              Eigen::Vector2d(0.5 * M_PI, M_PI));
 }
 
 Pose2 gait_pose(const AsterixKinematics& kin, const Gait& gait, double t_start, double t_end,

@@ -38,6 +38,12 @@ class Gait {
   Eigen::VectorXd offset_, amplitude_, phase_;
 };
 
+/// Phase origin (ours, from seed 000 §6): every gait starts at phase 0 with the steering at its
+/// positive extreme (a cosine). The paper's Naive strategy "always resets to the initial position
+/// of g2: g2(0), meaning it biases towards that side", so g2(0) is to one side, not the centre.
+/// (With a sine origin the Naive reset straightened the rover: measured over the §5 protocol it
+/// then had the LOWEST heading change and a duration below Linear/Spline's, the reverse of §6.)
+///
 /// Squirming (§5, Fig. 5): the steering joint oscillates between (92% of) its limits, roll fixed
 /// at 0. Period 8 s (ours): peak steering rate 0.43 rad/s with the default limits.
 Gait squirming(const AsterixParameters& p = {});

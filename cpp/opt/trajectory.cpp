@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "ernest/common/validation.hpp"
 
@@ -51,6 +52,34 @@ void spline_stencil_at(int n, double s, SplineStencil& st) {
   spline_stencil(n, k, x - k, st);
 }
 
+CubicExtrema cubic_extrema(double d1_0, double d2_0, double d2_1) {
+  CubicExtrema e;
+  const double a = 0.5 * (d2_1 - d2_0), b = d2_0, c = d1_0;  // q'(u) = a u^2 + b u + c
+  auto keep_root = [&e](double u) {
+    if (std::isfinite(u) && u > 0.0 && u < 1.0) e.root[e.roots++] = u;
+  };
+  if (a == 0.0) {
+    if (b != 0.0) keep_root(-c / b);
+  } else {
+    const double disc = b * b - 4.0 * a * c;
+    if (disc >= 0.0) {
+      // Stable pair: qq = -(b + sign(b) sqrt(disc)) / 2, roots qq / a and c / qq.
+      const double qq = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+      keep_root(qq / a);
+      if (qq != 0.0) keep_root(c / qq);
+    }
+  }
+  if (e.roots == 2 && e.root[0] > e.root[1]) std::swap(e.root[0], e.root[1]);
+  if (d2_0 != d2_1) {
+    const double u = d2_0 / (d2_0 - d2_1);
+    if (u > 0.0 && u < 1.0) {
+      e.has_vertex = true;
+      e.vertex = u;
+    }
+  }
+  return e;
+}
+
 SplineTrajectory::SplineTrajectory(Eigen::MatrixXd waypoints, Eigen::VectorXd start_velocity,
                                    Eigen::VectorXd end_velocity, double duration)
     : waypoints_(std::move(waypoints)),
@@ -83,6 +112,36 @@ void SplineTrajectory::evaluate(int j, double t, double& q, double& dq, double& 
   q = out[0];
   dq = out[1] / duration_;
   ddq = out[2] / (duration_ * duration_);
+}
+
+void SplineTrajectory::max_abs(int j, double& position, double& velocity) const {
+  const int n = size();
+  const double ds = 1.0 / (n - 1);
+  const double m0 = start_velocity_[j] * duration_, m1 = end_velocity_[j] * duration_;
+  // d-th derivative with respect to s of segment k at local u.
+  auto at = [&](int k, double u, int d) {
+    SplineStencil st;
+    spline_stencil(n, k, u, st);
+    double acc = st.start_tangent[d] * m0 + st.end_tangent[d] * m1;
+    for (int i = 0; i < 4; ++i) {
+      const int idx = st.first + i;
+      if (idx >= 0 && idx < n) acc += st.w[d][i] * waypoints_(j, idx);
+    }
+    return acc;
+  };
+  position = velocity = 0.0;
+  for (int k = 0; k < n - 1; ++k) {
+    for (double u : {0.0, 1.0}) {
+      position = std::max(position, std::abs(at(k, u, 0)));
+      velocity = std::max(velocity, std::abs(at(k, u, 1)));
+    }
+    // Derivatives with respect to u are ds^d times those with respect to s.
+    const CubicExtrema e =
+        cubic_extrema(ds * at(k, 0.0, 1), ds * ds * at(k, 0.0, 2), ds * ds * at(k, 1.0, 2));
+    for (int r = 0; r < e.roots; ++r) position = std::max(position, std::abs(at(k, e.root[r], 0)));
+    if (e.has_vertex) velocity = std::max(velocity, std::abs(at(k, e.vertex, 1)));
+  }
+  velocity /= duration_;
 }
 
 TrapezoidTrajectory::TrapezoidTrajectory(const Eigen::VectorXd& from, const Eigen::VectorXd& to,

@@ -26,6 +26,19 @@ void spline_stencil(int waypoints, int segment, double u, SplineStencil& out);
 /// Same at normalised time s in [0, 1].
 void spline_stencil_at(int waypoints, double s, SplineStencil& out);
 
+/// Interior points of one cubic segment q(u), u in (0, 1), where its position or its velocity can
+/// peak, from q'(0), q''(0) and q''(1) (derivatives with respect to u; q'' is linear in u):
+///   roots of the quadratic q'(u) = q'(0) + q''(0) u + (q''(1) - q''(0)) u^2 / 2  (position extrema),
+///   the zero of q''(u), the vertex of q' (velocity extremum).
+/// Together with the segment ends these are every candidate for max |q| and max |q'| (exact).
+struct CubicExtrema {
+  int roots = 0;           ///< number of roots of q' strictly inside (0, 1)
+  double root[2] = {};
+  bool has_vertex = false; ///< q'' changes sign strictly inside (0, 1)
+  double vertex = 0.0;
+};
+CubicExtrema cubic_extrema(double d1_0, double d2_0, double d2_1);
+
 /// A C1 piecewise-cubic trajectory over t in [0, duration]: waypoints (joints x N, equally spaced in
 /// time) and the end velocities (start_velocity, end_velocity) in joint units per second.
 class SplineTrajectory {
@@ -39,6 +52,9 @@ class SplineTrajectory {
   const Eigen::MatrixXd& waypoints() const { return waypoints_; }
   /// Position, velocity, acceleration of joint j at t in [0, duration] (clamped).
   void evaluate(int j, double t, double& q, double& dq, double& ddq) const;
+  /// Exact max over [0, duration] of |q_j| and |dq_j/dt| (segment ends and the interior extrema of
+  /// every cubic segment, cubic_extrema), not a sampled estimate.
+  void max_abs(int j, double& position, double& velocity) const;
 
  private:
   Eigen::MatrixXd waypoints_;

@@ -75,7 +75,6 @@ void TransitionOptions::validate() const {
   solver.validate();
   constexpr const char* o = "TransitionOptions";
   require_in_range(o, "waypoints", waypoints, 3, 2000);
-  require_in_range(o, "constraint_samples", constraint_samples, 1, 1000);
   require_in_range(o, "min_duration", min_duration, 1e-3, 1e4);
   require_in_range(o, "max_duration", max_duration, min_duration, 1e4);
   require_positive(o, "duration_scale", duration_scale);
@@ -85,6 +84,7 @@ void TransitionOptions::validate() const {
   require_positive(o, "linear_scale", linear_scale);
   require_in_range(o, "initial_durations", initial_durations, 1, 1000);
   require_in_range(o, "initial_phases", initial_phases, 1, 1000);
+  require_in_range(o, "limit_margin", limit_margin, 0.0, 0.1);
   require_in_range(o, "feasibility_tol", feasibility_tol, 0.0, 1.0);
   integration.validate();
 }
@@ -145,6 +145,16 @@ void TransitionResult::evaluate(int j, double tau, double& q, double& dq, double
     spline.evaluate(j, tau, q, dq, ddq);
 }
 
+void TransitionResult::peaks(int j, double& position, double& velocity) const {
+  if (strategy != Strategy::Naive) return spline.max_abs(j, position, velocity);
+  // The trapezoid moves monotonically between its ends at |q̇| <= its cruise speed.
+  double q0, q1, dq, ddq;
+  trapezoid.evaluate(j, 0.0, q0, dq, ddq);
+  trapezoid.evaluate(j, trapezoid.duration(), q1, dq, ddq);
+  position = std::max(std::abs(q0), std::abs(q1));
+  velocity = trapezoid.cruise_velocity(j);
+}
+
 void TransitionResult::executed(const TransitionProblem& problem, int j, double t, double& q,
                                 double& dq, double& ddq) const {
   if (t < t1)
@@ -171,6 +181,13 @@ TransitionResult naive_transition(const TransitionProblem& problem) {
   r.phase_shift = problem.t1 + r.duration;
   r.end_phase = 0.0;
   r.solver.status_name = "NOT_OPTIMISED";
+  r.max_violation = -kInf;
+  for (int j = 0; j < problem.joints(); ++j) {
+    double q, v;
+    r.peaks(j, q, v);
+    r.max_violation = std::max({r.max_violation, q / problem.position_limit[j] - 1.0,
+                                v / problem.velocity_limit[j] - 1.0});
+  }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
@@ -208,14 +225,9 @@ class TransitionCost {
       spline_stencil(n_, k, 0.0, seg_[2 * k]);
       spline_stencil(n_, k, 1.0, seg_[2 * k + 1]);
     }
-    if (strategy_ == Strategy::Bezier) {
-      const int K = o.constraint_samples;
-      samples_.resize(K);
-      for (int k = 0; k < K; ++k) spline_stencil_at(n_, (k + 1.0) / (K + 1.0), samples_[k]);
-      m_ = 4 * nj_ * K;
-    } else {
-      m_ = 2 * nj_ * (n_ - 1);
-    }
+    // Two exact-limit rows per joint (position, velocity); Linear/Spline add eq 17's two rows per
+    // pair of consecutive waypoints.
+    m_ = 2 * nj_ + (strategy_ == Strategy::Bezier ? 0 : 2 * nj_ * (n_ - 1));
     const int P = n_ + 3;
     y_.assign(3 + 3 * P, 0.0);
   }
@@ -431,66 +443,87 @@ class TransitionCost {
     return f;
   }
 
-  // Inequality constraints (<= 0). Bezier: position and velocity limits at sampled times.
-  // Linear/Spline: eq 17 between consecutive waypoints, written linearly in (theta, T):
-  //   ±(θ_t − θ_{t−1}) / (θ̇_max ds) − T <= 0   (ds = 1/(N−1), Δt = T ds).
-  // Eq 16 (positions) is the box bound of the interior waypoints.
+  // Inequality constraints (<= 0).
+  // Rows 0 .. 2 nj - 1, every strategy: eqs 16–17 EXACTLY along the whole curve, not at samples:
+  //   max_t |q_j(t)| / P_j - 1 <= 0   and   max_t |q̇_j(t)| / V_j - 1 <= 0,
+  // the maxima taken over the exact candidates of each cubic segment (its ends, the roots of its
+  // quadratic q', the vertex of q'; cubic_extrema). A cubic Bezier (eqs 9–13) has a quadratic
+  // velocity, so its peak between the ends is at the vertex; the position peaks where q' = 0.
+  // At every candidate the derivative along s vanishes (or s is a segment end, fixed), so the
+  // gradient of the maximum is the partial gradient at the fixed candidate s (envelope theorem);
+  // the row is Lipschitz and smooth wherever one candidate is the strict maximum.
+  // Linear/Spline then add eq 17 between consecutive waypoints, linear in (theta, T):
+  //   ±(θ_t − θ_{t−1}) / (θ̇_max ds) − T <= 0   (ds = 1/(N−1), Δt = T ds),
+  // implied by the exact rows (a chord's slope is the mean velocity over its segment) but kept as
+  // the paper's linear constraints. Eq 16 also bounds the interior waypoints (box bounds).
   void constraints(const double* x, double* c, double* jac) {
     unpack(x);
     if (jac) std::fill(jac, jac + static_cast<std::size_t>(m_) * dim_, 0.0);
     int row = 0;
-    if (strategy_ == Strategy::Bezier) {
-      for (int j = 0; j < nj_; ++j) {
-        const double P = pb_.position_limit[j], V = pb_.velocity_limit[j];
-        for (const SplineStencil& st : samples_) {
-          const double q = value(st, 0, j), qp = value(st, 1, j), v = qp / T_;
-          const double vals[4] = {(q - P) / P, (-q - P) / P, (v - V) / V, (-v - V) / V};
-          for (int r = 0; r < 4; ++r) {
-            c[row + r] = vals[r];
-            if (!jac) continue;
-            clear_grad();
-            const double sign = (r % 2 == 0) ? 1.0 : -1.0;
-            if (r < 2) {
-              add_grad(st, 0, j, sign / P);
-            } else {
-              add_grad(st, 1, j, sign / (V * T_));
-              gT_ += -sign * qp / (V * T_ * T_);
-            }
-            chain(jac + static_cast<std::size_t>(row + r) * dim_);
-          }
-          row += 4;
-        }
+    for (int j = 0; j < nj_; ++j) {
+      const Peak pos = peak(j, 0), vel = peak(j, 1);
+      const double P = pb_.position_limit[j], V = pb_.velocity_limit[j];
+      const double vq = std::abs(pos.value), vv = std::abs(vel.value);
+      c[row] = vq / P - (1.0 - o_.limit_margin);
+      c[row + 1] = vv / (V * T_) - (1.0 - o_.limit_margin);
+      if (jac) {
+        SplineStencil st;
+        clear_grad();
+        spline_stencil(n_, pos.segment, pos.u, st);
+        add_grad(st, 0, j, std::copysign(1.0 / P, pos.value));
+        chain(jac + static_cast<std::size_t>(row) * dim_);
+        clear_grad();
+        spline_stencil(n_, vel.segment, vel.u, st);
+        add_grad(st, 1, j, std::copysign(1.0 / (V * T_), vel.value));
+        gT_ += -vv / (V * T_ * T_);
+        chain(jac + static_cast<std::size_t>(row + 1) * dim_);
       }
-    } else {
-      for (int j = 0; j < nj_; ++j) {
-        const double k = 1.0 / (pb_.velocity_limit[j] * ds_);
-        for (int i = 1; i < n_; ++i) {
-          const double d = W_(j, i) - W_(j, i - 1);
-          for (int r = 0; r < 2; ++r) {
-            const double sign = r == 0 ? 1.0 : -1.0;
-            c[row] = sign * d * k - T_;
-            if (jac) {
-              double* J = jac + static_cast<std::size_t>(row) * dim_;
-              J[0] = -1.0;
-              if (i == n_ - 1)
-                J[1] += sign * k * g2v_[j];
-              else
-                J[index(j, i)] += sign * k;
-              if (i - 1 >= 1) J[index(j, i - 1)] -= sign * k;
-            }
-            ++row;
+      row += 2;
+    }
+    if (strategy_ == Strategy::Bezier) return;
+    for (int j = 0; j < nj_; ++j) {
+      const double k = 1.0 / (pb_.velocity_limit[j] * ds_);
+      for (int i = 1; i < n_; ++i) {
+        const double d = W_(j, i) - W_(j, i - 1);
+        for (int r = 0; r < 2; ++r) {
+          const double sign = r == 0 ? 1.0 : -1.0;
+          c[row] = sign * d * k - T_;
+          if (jac) {
+            double* J = jac + static_cast<std::size_t>(row) * dim_;
+            J[0] = -1.0;
+            if (i == n_ - 1)
+              J[1] += sign * k * g2v_[j];
+            else
+              J[index(j, i)] += sign * k;
+            if (i - 1 >= 1) J[index(j, i - 1)] -= sign * k;
           }
+          ++row;
         }
       }
     }
   }
 
+  // Exact normalised violation of the joint limits (eqs 16–17) along the curve at x: the largest
+  // of the exact rows of constraints() (<= 0 when feasible). This is what the result reports.
+  double limit_violation(const std::vector<double>& x) {
+    unpack(x.data());
+    double worst = -kInf;
+    for (int j = 0; j < nj_; ++j) {
+      const double q = std::abs(peak(j, 0).value), v = std::abs(peak(j, 1).value);
+      worst = std::max({worst, q / pb_.position_limit[j] - 1.0,
+                        v / (pb_.velocity_limit[j] * T_) - 1.0});
+    }
+    return std::isfinite(worst) ? worst : kInf;
+  }
+
+  // Feasibility of x: the exact rows (with the margin), eq 17's rows (normalised by T), bounds.
   double max_violation(const std::vector<double>& x, const std::vector<double>& lo,
                        const std::vector<double>& hi) {
     std::vector<double> c(m_);
     constraints(x.data(), c.data(), nullptr);
     double worst = -kInf;
-    for (double v : c) worst = std::max(worst, std::isfinite(v) ? v : kInf);
+    for (int r = 0; r < 2 * nj_; ++r) worst = std::max(worst, std::isfinite(c[r]) ? c[r] : kInf);
+    for (int r = 2 * nj_; r < m_; ++r) worst = std::max(worst, std::isfinite(c[r]) ? c[r] / T_ : kInf);
     for (int i = 0; i < dim_; ++i) {
       worst = std::max(worst, lo[i] - x[i]);
       worst = std::max(worst, x[i] - hi[i]);
@@ -516,6 +549,40 @@ class TransitionCost {
     return r;
   }
 
+  // Where |d-th derivative along s| of joint j peaks over the curve (d = 0 position, 1 velocity):
+  // the candidate with the largest magnitude among every segment's ends and interior extrema.
+  struct Peak {
+    double value = 0.0;  ///< signed value at the peak (d/ds units for d = 1)
+    int segment = 0;
+    double u = 0.0;
+  };
+  Peak peak(int j, int d) const {
+    Peak best;
+    best.value = value(seg_[0], d, j);
+    SplineStencil st;
+    auto consider = [&](int k, double u, double v) {
+      if (std::abs(v) > std::abs(best.value)) best = {v, k, u};
+    };
+    for (int k = 0; k < n_ - 1; ++k) {
+      const SplineStencil& s0 = seg_[2 * k];
+      const SplineStencil& s1 = seg_[2 * k + 1];
+      consider(k, 1.0, value(s1, d, j));
+      // Derivatives along the segment's local u are ds^d times those along s.
+      const CubicExtrema e = cubic_extrema(ds_ * value(s0, 1, j), ds_ * ds_ * value(s0, 2, j),
+                                           ds_ * ds_ * value(s1, 2, j));
+      if (d == 0) {
+        for (int r = 0; r < e.roots; ++r) {
+          spline_stencil(n_, k, e.root[r], st);
+          consider(k, e.root[r], value(st, 0, j));
+        }
+      } else if (e.has_vertex) {
+        spline_stencil(n_, k, e.vertex, st);
+        consider(k, e.vertex, value(st, 1, j));
+      }
+    }
+    return best;
+  }
+
  private:
   const TransitionProblem& pb_;
   AsterixKinematics kin_;
@@ -529,7 +596,7 @@ class TransitionCost {
   Eigen::VectorXd m0_, m1_, v1_, g2v_, g2a_, gm0_, gm1_;
   double gT_ = 0.0, gSigma_ = 0.0;
   double c_T_ = 0.0, c_A_ = 0.0, c_D_ = 0.0, c_L_ = 0.0;
-  std::vector<SplineStencil> seg_, samples_;
+  std::vector<SplineStencil> seg_;
   std::vector<double> y_;
 };
 
@@ -629,11 +696,18 @@ TransitionResult optimise(const TransitionProblem& problem, Strategy strategy,
     os << "SLSQP point infeasible (max violation " << viol << ", status " << sr.status_name << ")";
     throw std::runtime_error(os.str());
   }
+  const double limits = cost.limit_violation(sr.x);
+  if (!(limits <= 0.0)) {
+    std::ostringstream os;
+    os << "SLSQP point exceeds a joint limit (exact normalised violation " << limits
+       << ", status " << sr.status_name << ")";
+    throw std::runtime_error(os.str());
+  }
   if (sr.status < 0 && sr.status != NLOPT_ROUNDOFF_LIMITED)
     throw std::runtime_error("SLSQP failed with status " + sr.status_name);
   TransitionResult r = cost.build(sr.x, f);
   r.solver = sr;
-  r.max_violation = viol;
+  r.max_violation = limits;
   return r;
 }
 

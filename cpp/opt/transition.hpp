@@ -46,7 +46,6 @@ struct CostWeights {
 struct TransitionOptions {
   SolverOptions solver;            ///< SLSQP tolerances and the 0.5 s budget (max_time)
   int waypoints = 100;             ///< Linear/Spline waypoints per joint (paper: 100)
-  int constraint_samples = 16;     ///< Bezier: samples where position/velocity limits are imposed
   double min_duration = 0.2;       ///< bounds on T [s]
   double max_duration = 30.0;
   double duration_scale = 1.0;     ///< [s]
@@ -56,7 +55,11 @@ struct TransitionOptions {
   double linear_scale = 0.1;       ///< [rad]
   int initial_durations = 10;      ///< grid of the initial search over (T, end phase)
   int initial_phases = 24;
-  double feasibility_tol = 1e-6;   ///< accepted normalised constraint violation
+  /// SLSQP sees the joint limits tightened by this fraction (exact rows: |q| / P <= 1 - margin):
+  /// its converged point is feasible only to its own constraint_tol, and the returned transition
+  /// must never exceed the true limits (it is rejected if it does).
+  double limit_margin = 1e-7;
+  double feasibility_tol = 1e-6;   ///< accepted normalised violation of eq 17's rows and the bounds
   bool fallback = true;            ///< on failure use Naive (reason reported) instead of throwing
   IntegrationOptions integration{1e-9, 1e-8, 200000};
   void validate() const;
@@ -96,10 +99,15 @@ struct TransitionResult {
   double seconds = 0.0;                 ///< total wall-clock time incl. the initial search
   double cost = 0.0;                    ///< eq 8 (weighted sum) of the returned optimised solution
   double cost_duration = 0.0, cost_acceleration = 0.0, cost_deviation = 0.0, cost_linear = 0.0;
-  double max_violation = 0.0;           ///< largest normalised constraint violation (<= 0 feasible)
+  /// Exact largest normalised joint-limit violation along the transition (eqs 16–17, <= 0 when
+  /// feasible): max over joints and over the whole curve of |q| / P - 1 and |q̇| / V - 1, from the
+  /// analytic extrema of its cubic segments (Naive: its trapezoid's end positions and cruise speed).
+  double max_violation = 0.0;
   int joints() const;
   /// Transition position/velocity/acceleration of joint j at tau in [0, T] after t1.
   void evaluate(int j, double tau, double& q, double& dq, double& ddq) const;
+  /// Exact max over the transition of |q_j| and |q̇_j| (analytic extrema, not samples).
+  void peaks(int j, double& position, double& velocity) const;
   /// Joint j of the executed motion at absolute time t: g1 before t1, the transition, then
   /// g2(t − φ).
   void executed(const TransitionProblem& problem, int j, double t, double& q, double& dq,

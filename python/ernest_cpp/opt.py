@@ -167,8 +167,8 @@ def run_protocol(points: int = 5, max_time: float = 0.5,
 def summarise(rows: list[dict]) -> list[dict]:
     """Mean (and std) of the metrics per configuration, in CONFIGURATIONS order."""
     keys = ("duration_s", "heading_change_deg", "heading_deviation_deg", "position_deviation_m",
-            "max_acc_steering", "max_acc_roll", "cost_of_transport", "energy_J", "distance_m",
-            "solve_ms")
+            "max_acc_steering", "max_acc_roll", "cost_of_transport", "energy_J", "energy_wheels_J",
+            "energy_articulation_J", "distance_m", "solve_ms")
     out = []
     labels = []
     for r in rows:

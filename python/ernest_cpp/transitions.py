@@ -5,7 +5,8 @@ and back at 5 points over the wheel-walking period, for Bezier, Linear and Splin
 Table 1's three weight sets, plus Naive (10 configurations x 10 transitions). Writes a CSV of every
 transition, a markdown table of the per-configuration means, bar charts like Figs 8–11 (duration,
 heading change, max steering/roll acceleration, cost of transport) and example transitions like
-Figs 2–4 (joint angle vs time with g1, g2 and the transition).
+Figs 2–4 (joint angle vs time with g1, g2 and the transition), and findings.md: each qualitative
+statement of seed 000 §6 with the paper's and our ranking and whether it holds (findings.py).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import time
 import numpy as np
 
 from . import opt as O
+from .findings import findings_markdown, paper_findings  # noqa: F401  (paper_findings: public)
 
 COLORS = {"bezier": "tab:blue", "spline": "tab:orange", "linear": "tab:green", "naive": "tab:red"}
 CSV_COLUMNS = ("configuration", "strategy", "weights", "direction", "used", "t1", "duration_s",
@@ -76,7 +78,10 @@ def bar_charts(summary: list[dict], out_dir: str) -> list[str]:
     colors = [COLORS[s["strategy"]] for s in summary]
     x = np.arange(len(summary))
     specs = [("duration_s", "Transition duration [s]", "fig8_duration.png", "Fig. 8"),
-             ("heading_change_deg", "|Heading change| [deg]", "fig9_heading.png", "Fig. 9"),
+             # Fig. 9 is the "heading deviation caused by transition": the heading reached minus
+             # eq 7's (what g2 would have reached over the same window); see findings.py.
+             ("heading_deviation_deg", "|Heading deviation vs eq 7| [deg]", "fig9_heading.png",
+              "Fig. 9"),
              ("cost_of_transport", "Cost of transport [-]", "fig11_cost_of_transport.png",
               "Fig. 11")]
     paths = []
@@ -197,12 +202,19 @@ def run(args: argparse.Namespace) -> int:
     with open(tmp, "w") as fh:
         fh.write("# Gait transitions (seed 000 protocol, simulated Asterix)\n\n" + table + "\n")
     os.replace(tmp, md_path)
+    findings_path = os.path.join(args.out, "findings.md")
+    findings = findings_markdown(paper_findings(summary))
+    tmp = _atomic_path(findings_path)
+    with open(tmp, "w") as fh:
+        fh.write("# Seed 000 Figs 8–11: the paper's findings against ours\n\n" + findings + "\n")
+    os.replace(tmp, findings_path)
     print("plots ...", flush=True)
     pngs = bar_charts(summary, args.out)
     if not args.no_examples:
         pngs += example_plots(args.out, args.max_time)
     print(table)
-    print(f"wrote {csv_path}, {md_path}, {len(pngs)} plots in {time.perf_counter() - t0:.1f} s")
+    print(findings)
+    print(f"wrote {csv_path}, {md_path}, {findings_path}, {len(pngs)} plots in {time.perf_counter() - t0:.1f} s")
     return 0
 
 

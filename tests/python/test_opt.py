@@ -160,7 +160,7 @@ def test_transitions_command_writes_outputs(tmp_path):
     assert rc == 0
     for name in ("transitions.csv", "summary.md", "fig8_duration.png", "fig9_heading.png",
                  "fig10_max_acceleration.png", "fig11_cost_of_transport.png", "fig2_naive.png",
-                 "fig3_bezier.png", "fig4_linear.png", "asterix_example.png"):
+                 "fig3_bezier.png", "fig4_linear.png", "asterix_example.png", "findings.md"):
         assert (out / name).stat().st_size > 0, name
     lines = (out / "transitions.csv").read_text().strip().splitlines()
     assert len(lines) == 1 + 10 * 2  # header + 10 configurations x 2 directions x 1 point
