@@ -159,6 +159,11 @@ void SimOptions::validate() const {
           "SimOptions.friction = " + std::to_string(friction) +
               " must be finite and <= 10 (< 0 draws it from rigid)");
   require_in_range(o, "rigid_slip", rigid_slip, 0.0, 1.0);
+  require_in_range(o, "rigid_tangential_stiffness", rigid_tangential_stiffness, 0.0, 1e8);
+  require_in_range(o, "rigid_tangential_damping", rigid_tangential_damping, 0.0, 1e8);
+  require(rigid_tangential_stiffness * dt + rigid_tangential_damping > 0.0,
+          "SimOptions.rigid_tangential_stiffness and rigid_tangential_damping must not both be 0 "
+          "(a perfectly sticking tyre has no finite row)");
   require_in_range(o, "max_speed", max_speed, 1e-3, 1e6);
   require_in_range(o, "max_angular_speed", max_angular_speed, 1e-3, 1e7);
 }
@@ -220,6 +225,11 @@ void RoverSim::Impl::build() {
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
   contact_erp = opt.rigid.erp(opt.dt);
   contact_cfm = opt.rigid.cfm(opt.dt);
+  {  // the tyre's tangential spring–damper as a soft row (rover_rigid.cpp)
+    const double kh = opt.rigid_tangential_stiffness * opt.dt + opt.rigid_tangential_damping;
+    tangential_cfm = 1.0 / kh;
+    tangential_erp = opt.rigid_tangential_stiffness * opt.dt / kh;
+  }
 
   // Bodies in the nominal pose (rover frame = world, psi = phi = 0); reset() moves them.
   dMass m;
@@ -361,6 +371,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   row_mode.fill(kFree);
   row_mode_before.fill(kFree);
   alternating = false;
+  rigid_deflection.fill(Vec3::Zero());
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);
@@ -490,6 +501,8 @@ Snapshot RoverSim::snapshot() const {
   s.row_mode = impl_->row_mode;
   s.row_mode_before = impl_->row_mode_before;
   s.alternating = impl_->alternating;
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) s.rigid_deflection[i][k] = impl_->rigid_deflection[i][k];
   impl_->lcp.save(s.solver_patterns);
   s.valid = true;
   return s;
@@ -518,6 +531,8 @@ void RoverSim::restore(const Snapshot& s) {
   impl_->row_mode = s.row_mode;
   impl_->row_mode_before = s.row_mode_before;
   impl_->alternating = s.alternating;
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) impl_->rigid_deflection[i][k] = s.rigid_deflection[i][k];
   impl_->pending_force.setZero();
   impl_->diverged = false;
   impl_->start_current = false;

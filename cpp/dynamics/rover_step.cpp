@@ -275,6 +275,7 @@ void RoverSim::Impl::step() {
   base_torque.fill(Vec3::Zero());
   prepare_actuators(psi, phi);
   prepare_ground();
+  if (opt.ground == GroundType::Rigid) prepare_rigid();
   prepare_obstacles();
   base_force[kChassis] += pending_force;
   pending_force.setZero();
@@ -331,6 +332,7 @@ void RoverSim::Impl::step() {
     settle(nullptr, next.data());
     dJointGroupEmpty(contacts);
   }
+  if (opt.ground == GroundType::Rigid) commit_rigid();
   row_mode_before = row_mode;
   row_mode = next;
   ++stats.steps;
