@@ -68,9 +68,10 @@ void RoverSim::Impl::emit_rigid(int i, const std::int8_t* modes) {
   ct.surface.mu = sticking ? dInfinity : mu;
   ct.surface.soft_erp = contact_erp;
   ct.surface.soft_cfm = contact_cfm;
-  ct.surface.slip1 = ct.surface.slip2 = tangential_cfm;
-  ct.surface.motion1 = -tangential_erp / opt.dt * rigid_deflection[i].dot(g.fx);
-  ct.surface.motion2 = -tangential_erp / opt.dt * rigid_deflection[i].dot(g.fy);
+  ct.surface.slip1 = tangential_cfm[0];
+  ct.surface.slip2 = tangential_cfm[1];
+  ct.surface.motion1 = -tangential_erp[0] / opt.dt * rigid_deflection[i].dot(g.fx);
+  ct.surface.motion2 = -tangential_erp[1] / opt.dt * rigid_deflection[i].dot(g.fy);
   dJointID j = dJointCreateContact(world, contacts, &ct);
   dJointAttach(j, body[2 + i], nullptr);
   dJointSetFeedback(j, &ground_fb[i]);
@@ -104,13 +105,13 @@ bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& v
     const Vec3& dir = k == 0 ? g.fx : g.fy;
     const double d = rigid_deflection[i].dot(dir), v = vp.dot(dir);
     const double lambda = f.dot(dir);
-    const double law = (-tangential_erp / h * d - v) / tangential_cfm;  // the unclamped force
+    const double law = (-tangential_erp[k] / h * d - v) / tangential_cfm[k];  // unclamped force
     const std::int8_t status = status_of(law, cap);
     row_force[row] = lambda;
     next[row] = status;
     inside = inside && std::abs(lambda) <= cap;
     // Sticking: the deflection grows by the step's slip; sliding: it carries the friction force.
-    const double k_t = opt.rigid_tangential_stiffness;
+    const double k_t = k == 0 ? opt.rigid_tyre_stiffness_x : opt.rigid_tyre_stiffness_y;
     d_end += dir * (status == kFree ? d + h * v : k_t > 0.0 ? -lambda / k_t : 0.0);
   }
   rigid_deflection_end[i] = d_end;

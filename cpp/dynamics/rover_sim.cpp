@@ -159,11 +159,10 @@ void SimOptions::validate() const {
           "SimOptions.friction = " + std::to_string(friction) +
               " must be finite and <= 10 (< 0 draws it from rigid)");
   require_in_range(o, "rigid_slip", rigid_slip, 0.0, 1.0);
-  require_in_range(o, "rigid_tangential_stiffness", rigid_tangential_stiffness, 0.0, 1e8);
-  require_in_range(o, "rigid_tangential_damping", rigid_tangential_damping, 0.0, 1e8);
-  require(rigid_tangential_stiffness * dt + rigid_tangential_damping > 0.0,
-          "SimOptions.rigid_tangential_stiffness and rigid_tangential_damping must not both be 0 "
-          "(a perfectly sticking tyre has no finite row)");
+  require_in_range(o, "rigid_tyre_stiffness_x", rigid_tyre_stiffness_x, 0.0, 1e8);
+  require_in_range(o, "rigid_tyre_stiffness_y", rigid_tyre_stiffness_y, 0.0, 1e8);
+  // (> 0: with no damping a tyre without stiffness would be a perfectly sticking row)
+  require_in_range(o, "rigid_tyre_damping", rigid_tyre_damping, 1e-3, 1e8);
   require_in_range(o, "max_speed", max_speed, 1e-3, 1e6);
   require_in_range(o, "max_angular_speed", max_angular_speed, 1e-3, 1e7);
 }
@@ -225,10 +224,11 @@ void RoverSim::Impl::build() {
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
   contact_erp = opt.rigid.erp(opt.dt);
   contact_cfm = opt.rigid.cfm(opt.dt);
-  {  // the tyre's tangential spring–damper as a soft row (rover_rigid.cpp)
-    const double kh = opt.rigid_tangential_stiffness * opt.dt + opt.rigid_tangential_damping;
-    tangential_cfm = 1.0 / kh;
-    tangential_erp = opt.rigid_tangential_stiffness * opt.dt / kh;
+  for (int k = 0; k < 2; ++k) {  // the tyre's tangential spring–dampers as soft rows
+    const double stiffness = k == 0 ? opt.rigid_tyre_stiffness_x : opt.rigid_tyre_stiffness_y;
+    const double kh = stiffness * opt.dt + opt.rigid_tyre_damping;
+    tangential_cfm[k] = 1.0 / kh;
+    tangential_erp[k] = stiffness * opt.dt / kh;
   }
 
   // Bodies in the nominal pose (rover frame = world, psi = phi = 0); reset() moves them.

@@ -51,14 +51,16 @@ struct SimOptions {
   /// force-dependent slip, so that wheels with slightly different rolling radii do not fight
   /// each other through perfectly sticking contacts. 1e-4 = 1 cm/s of creep at 100 N.
   double rigid_slip = 1e-4;
-  /// Tangential stiffness [N/m] and damping [N s/m] of each tyre on rigid ground (assumptions,
-  /// ours): a spring–damper per friction direction capped by Coulomb's law (seed 004 §3.4), so a
-  /// parked rover holds where the friction cone allows and a constant force gives a constant
-  /// deflection (cpp/dynamics/rover_rigid.cpp). Stiffness: §3.4's normal 20 kN/m; damping: 1e4,
-  /// the former creep law's 1 / rigid_slip, which keeps rolling as it was. Obstacles keep
-  /// rigid_slip.
-  double rigid_tangential_stiffness = 20e3;
-  double rigid_tangential_damping = 1e4;
+  /// Tangential stiffness of each tyre on rigid ground [N/m], along its rolling direction and
+  /// along its axle, and the damping of both [N s/m] (assumptions, ours): a spring–damper per
+  /// friction direction capped by Coulomb's law (seed 004 §3.4), so a parked rover holds where the
+  /// friction cone allows and a constant force gives a constant deflection
+  /// (cpp/dynamics/rover_rigid.cpp). Longitudinal: §3.4's radial 20 kN/m. Lateral: ERNEST's
+  /// woven spring-mesh tyres (§2.1.1) give sideways; 1 kN/m lets the roll joint lift a wheel
+  /// against held wheels on hard ground (§2.2), whose contacts must scrub sideways to do so.
+  double rigid_tyre_stiffness_x = 20e3;
+  double rigid_tyre_stiffness_y = 1e3;
+  double rigid_tyre_damping = 1e3;
   /// Guess the active set of the bounded rows (motor limits, soil shear and compaction caps) from
   /// the previous step and verify it, instead of letting ODE's Dantzig solver pivot through it
   /// every step; a wrong guess is retried and finally solved by pivoting. The result is the same

@@ -110,7 +110,8 @@ struct RoverSim::Impl {
   soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
   double mu = 0.5;
   double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at opt.dt
-  double tangential_erp = 0.0, tangential_cfm = 0.0;  // the tyre's, rigid ground (rover_rigid.cpp)
+  // The tyre's along x and y on rigid ground (rover_rigid.cpp).
+  std::array<double, 2> tangential_erp{}, tangential_cfm{};
 
   dWorldID world = nullptr;
   dThreadingImplementationID threading = nullptr;

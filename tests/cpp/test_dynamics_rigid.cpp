@@ -3,6 +3,7 @@
 // acceleration outside it, at the default step and at a quarter of it.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -91,3 +92,48 @@ TEST_P(RigidSlope, RoverOutsideTheFrictionConeSlidesAtTheBlockOnInclineAccelerat
 
 INSTANTIATE_TEST_SUITE_P(Steps, RigidSlope, ::testing::Values(1.0, 4.0),
                          [](const auto& info) { return info.param == 1.0 ? "dt" : "dt_over_4"; });
+
+TEST(RigidGround, RollingTracksTheCommandAtEitherStep) {
+  // Sticking tyres roll: at 0.2 m/s on flat rigid ground the rover covers 0.2 m/s x 10 s (less
+  // the start from rest), the same at the default step and at a quarter of it.
+  std::array<double, 2> travelled{};
+  for (int s = 0; s < 2; ++s) {
+    SimOptions o;
+    o.ground = GroundType::Rigid;
+    o.friction = 0.8;
+    o.dt = SimOptions{}.dt / (s == 0 ? 1.0 : 4.0);
+    RoverSim sim(RoverParameters{}, HeightMap::flat(10, 10, 0.25), {}, o);
+    sim.reset(-3.0, 0.0, 0.0);
+    Commands c;
+    for (auto& w : c.wheel_speed) w = 0.2 / RoverParameters{}.wheel_radius;
+    sim.set_commands(c);
+    const double x0 = sim.state().position.x();
+    sim.step_n(steps_for(10.0, o.dt));
+    travelled[s] = sim.state().position.x() - x0;
+    EXPECT_NEAR(sim.state().linear_velocity.x(), 0.2, 0.002) << o.dt;
+    EXPECT_NEAR(travelled[s], 2.0, 0.02) << o.dt;
+    EXPECT_LT(std::abs(sim.state().position.y()), 1e-3) << o.dt;
+  }
+  std::printf("travelled %.4f m at dt, %.4f m at dt / 4\n", travelled[0], travelled[1]);
+  EXPECT_NEAR(travelled[0], travelled[1], 0.01 * travelled[1]);
+}
+
+TEST(RigidGround, RestoreRepeatsTheTyreDeflectionsBitForBit) {
+  // The tyres' deflections are state (Snapshot::rigid_deflection): a parked rover restored
+  // mid-run, then driven off, repeats the run exactly.
+  auto sim = parked(0.7, SimOptions{}.dt, true);
+  sim->step_n(20);  // deflected, still settling
+  const Snapshot s = sim->snapshot();
+  Commands c = sim->commands();
+  for (auto& w : c.wheel_speed) w = 1.0;
+  const auto run = [&] {
+    sim->set_commands(c);
+    sim->step_n(40);
+    return sim->state().position;
+  };
+  const Eigen::Vector3d first = run();
+  sim->restore(s);
+  const Eigen::Vector3d second = run();
+  EXPECT_EQ(first, second);
+  EXPECT_GT(std::abs(s.rigid_deflection[2][0]) + std::abs(s.rigid_deflection[2][2]), 1e-4);
+}
