@@ -205,8 +205,15 @@ bool solve_coulomb(LcpWorkspace& ws, unsigned n, unsigned nub, double* pairsbx,
     }
   };
   const double tol_w = 1e-9 * bscale;
-  // ODE's active set: friction rows pushed by their residual, others where ODE left them.
+  // ODE's active set: friction rows pushed by their residual, others where ODE left them. With
+  // no friction row at a bound ODE's answer is already Coulomb's (its bounds were not used).
   residuals();
+  bool clamped = false;
+  for (unsigned i = 0; i < n && !clamped; ++i) {
+    clamped = friction(i) && (std::abs(w[i]) > tol_w ||
+                              std::abs(x[i]) > std::abs(lh[2 * i + 1] * x[findex[i]]));
+  }
+  if (!clamped) return true;
   for (unsigned i = 0; i < n; ++i) {
     place[i] = kIn;
     if (unbounded(i)) continue;
@@ -482,7 +489,8 @@ void dxSolveLCP(dxWorldProcessMemArena* memarena, unsigned n, dReal* A, dReal* p
   }
   // Friction rows (within a scope, and not too many rows): keep the problem for solve_coulomb.
   bool coulomb = false;
-  if (ws && findex && n <= static_cast<unsigned>(ernest::dynamics::LdltPlan::kMaxRows)) {
+  if (ws && ws->exact_friction && findex &&
+      n <= static_cast<unsigned>(ernest::dynamics::LdltPlan::kMaxRows)) {
     for (unsigned i = nub; i < n && !coulomb; ++i) coulomb = findex[i] >= 0;
   }
   if (coulomb) {

@@ -224,6 +224,7 @@ void RoverSim::Impl::build() {
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
   contact_erp = opt.rigid.erp(opt.dt);
   contact_cfm = opt.rigid.cfm(opt.dt);
+  lcp.exact_friction = opt.ground == GroundType::Rigid;  // Coulomb's cap for sliding tyres
   for (int k = 0; k < 2; ++k) {  // the tyre's tangential spring–dampers as soft rows
     const double stiffness = k == 0 ? opt.rigid_tyre_stiffness_x : opt.rigid_tyre_stiffness_y;
     const double kh = stiffness * opt.dt + opt.rigid_tyre_damping;
