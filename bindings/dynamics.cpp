@@ -149,7 +149,14 @@ void bind_dynamics(py::module_& m) {
                      "soil normal damping [N s/m per wheel]: F_n = max(0, F_z - c v_n) (assumption)")
       .def_readwrite("rigid", &SimOptions::rigid, "ernest_cpp.soil.RigidContactParameters")
       .def_readwrite("friction", &SimOptions::friction, "< 0 draws it from rigid with the seed")
-      .def_readwrite("rigid_slip", &SimOptions::rigid_slip, "tyre creep [(m/s)/N] (assumption)")
+      .def_readwrite("rigid_slip", &SimOptions::rigid_slip,
+                     "tyre creep on rigid obstacles [(m/s)/N] (assumption)")
+      .def_readwrite("rigid_tyre_stiffness_x", &SimOptions::rigid_tyre_stiffness_x,
+                     "tyre stiffness along the rolling direction on rigid ground [N/m] (assumption)")
+      .def_readwrite("rigid_tyre_stiffness_y", &SimOptions::rigid_tyre_stiffness_y,
+                     "tyre stiffness along the axle on rigid ground [N/m] (assumption)")
+      .def_readwrite("rigid_tyre_damping", &SimOptions::rigid_tyre_damping,
+                     "tyre tangential damping on rigid ground [N s/m] (assumption)")
       .def_readwrite("guess_active_set", &SimOptions::guess_active_set,
                      "guess the bounded rows' active set from the last step and verify it (same "
                      "solution, ~3x faster on soil); False always pivots in ODE's LCP")

@@ -9,7 +9,9 @@
 // the thread, such problems are solved with SparseLdlt (the bounded rows guessed as they ended
 // last time) and checked exactly as Dantzig's method would end; anything else (friction with
 // findex, a bounded row without a zero bound, guesses that keep failing, more than 64 rows, no
-// scope) goes to ODE's own solver, found with dlsym.
+// scope) goes to ODE's own solver, found with dlsym. ODE bounds a friction row by mu times the
+// normal force found before the friction rows; within a scope that asks for it (exact_friction)
+// its answer is then corrected to Coulomb's law with the final normal force (solve_coulomb).
 #pragma once
 
 #include <array>
@@ -45,6 +47,18 @@ struct LcpWorkspace {
   SparseLdlt ldlt;
   std::uint64_t sparse = 0;    // solves done here
   std::uint64_t dense = 0;     // solves handed to ODE's Dantzig solver
+  /// Correct ODE's friction (findex) bounds to mu times the final normal force (solve_coulomb in
+  /// ode_lcp.cpp). Set for rigid ground, whose sliding tyres need it; off on soil, where only rock
+  /// contacts have friction rows and the correction (a dense solve of every rock-contact step)
+  /// would double the rock field's step time.
+  bool exact_friction = false;
+  /// Dense solves with friction (findex) rows whose bounds could not be made mu times the final
+  /// normal force (ODE's approximate answer stands; see solve_coulomb in ode_lcp.cpp).
+  std::uint64_t friction_unresolved = 0;
+  /// The problem as ODE received it (its solver overwrites A), for solve_coulomb.
+  std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> a_copy{};
+  std::array<double, 2 * LdltPlan::kMaxRows> bx_copy{}, lh_copy{};
+  std::array<int, LdltPlan::kMaxRows> findex_copy{};
 
   /// The remembered plan for these rows, or nullptr.
   LdltPlan* find(const unsigned* rows, int n, int stride);

@@ -19,20 +19,6 @@ RoverSim::Impl::DriveRow RoverSim::Impl::drive_row(int k) const {
   return {kYawMotor + (k - 4), k == 4 ? yaw_axis : roll_axis, kChassis, kBogie};
 }
 
-// Rigid ground (§3.4) under wheel i: the contact's rows are guessed like the soil's. Normal at 0
-// (separating): no contact at all. Normal pushing and both friction rows inside mu times it
-// (sticking, the rolling wheel's usual case): a contact whose friction rows are unbounded (its
-// normal row, bounded below by zero, is solved exactly by the sparse solver, ode_lcp.cpp). A
-// friction row at its bound (sliding): ODE's own contact with its bounds, because the bound,
-// mu times the normal force, is itself unknown, so no explicit force can stand for it.
-RoverSim::Impl::RigidEmit RoverSim::Impl::rigid_emit(const std::int8_t* modes, int wheel) const {
-  if (!modes) return RigidEmit::Bounded;
-  const std::int8_t* m = modes + kRowsPerWheel * wheel;
-  if (m[kNormal] == kAtLo) return RigidEmit::None;
-  if (m[kNormal] == kFree && m[kShearX] == kFree && m[kShearY] == kFree) return RigidEmit::Guessed;
-  return RigidEmit::Bounded;
-}
-
 // The x and y rows at the patch are the friction rows of an ODE contact with the terrain
 // normal n (fdir1 = x, then n × x = y), whose own normal row carries the normal force, bounded
 // below by zero: the sparse solver (ode_lcp.cpp) solves it exactly whether it pushes or not, so
@@ -78,30 +64,8 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
     dJointAttach(j, wb, nullptr);
     if (fb) dJointSetFeedback(j, fb);
   };
-  if (!soft) {
-    const RigidEmit how = rigid_emit(modes, i);
-    if (how == RigidEmit::None) return;
-    dContact ct;
-    std::memset(&ct, 0, sizeof ct);
-    for (int k = 0; k < 3; ++k) {
-      ct.geom.pos[k] = g.point[k];
-      ct.geom.normal[k] = g.n[k];
-    }
-    // Coulomb friction mu (pyramid): ODE bounds these rows by mu times the normal force found
-    // before them (findex), an order-dependent approximation of Coulomb's law.
-    for (int k = 0; k < 3; ++k) ct.fdir1[k] = g.fx[k];
-    ct.geom.depth = g.depth;
-    // Sticking (guessed): friction rows unbounded, the §3.4 spring–damper normal row as is.
-    const bool sticking = how == RigidEmit::Guessed;
-    ct.surface.mode = (sticking ? 0 : dContactApprox1) | dContactSoftERP | dContactSoftCFM |
-                      dContactSlip1 | dContactSlip2 | dContactFDir1;
-    ct.surface.mu = sticking ? dInfinity : mu;
-    ct.surface.slip1 = ct.surface.slip2 = opt.rigid_slip;
-    ct.surface.soft_erp = contact_erp;
-    ct.surface.soft_cfm = contact_cfm;
-    dJointID j = dJointCreateContact(world, contacts, &ct);
-    dJointAttach(j, wb, nullptr);
-    dJointSetFeedback(j, &ground_fb[i]);
+  if (!soft) {  // rigid ground: rover_rigid.cpp
+    emit_rigid(i, modes);
     return;
   }
   // Soft soil: the explicit share of the axle torque (soil_terms), then the rows.
@@ -187,48 +151,6 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
     dBodySetTorque(body[b], t[b].x(), t[b].y(), t[b].z());
   }
   check_forces_before_step();
-}
-
-// Rigid ground under wheel i after the step: the contact's forces (from the joints' feedback) and
-// where Coulomb's law puts each row (next[]). Returns false if a guess was wrong: a guessed
-// contact whose normal force is negative or whose friction exceeds mu times it, or a missing one
-// that the spring–damper would push. A contact ODE solved with its bounds is right by
-// construction: only its outcome is recorded.
-bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& vp,
-                                  std::int8_t* next) {
-  const GroundContact& g = ground[i];
-  const int r = kRowsPerWheel * i;
-  const RigidEmit how = rigid_emit(modes, i);
-  if (how == RigidEmit::None) {
-    const double push = contact_erp * g.depth / opt.dt - vp.dot(g.n);
-    next[r + kNormal] = push > 0.0 ? kFree : kAtLo;
-    next[r + kShearX] = next[r + kShearY] = kFree;
-    return push <= 0.0;
-  }
-  const Vec3 f = to_vec(ground_fb[i].f1);
-  const double fn = f.dot(g.n), fx = f.dot(g.fx), fy = f.dot(g.fy);
-  row_force[r + kNormal] = fn;
-  row_force[r + kShearX] = fx;
-  row_force[r + kShearY] = fy;
-  const double cap = mu * std::max(fn, 0.0);
-  next[r + kNormal] = fn > 0.0 ? kFree : kAtLo;
-  if (how == RigidEmit::Guessed) {
-    // The check is exact: |lambda| <= mu F_n. The outcome for the next step leaves a margin:
-    // friction near its cap is about to slide, and a failed guess costs a second step.
-    next[r + kShearX] = status_of(fx, kStickMargin * cap);
-    next[r + kShearY] = status_of(fy, kStickMargin * cap);
-    return fn > 0.0 && std::abs(fx) <= cap && std::abs(fy) <= cap;
-  }
-  // ODE bounded these rows by mu times the normal force it had when it clamped them, which can be
-  // 30 % off the final one, so the force does not tell sliding from sticking; the slip velocity
-  // does: a row whose law lambda = -v_t / slip exceeds the bound is sliding.
-  const auto law = [&](const Vec3& dir) {
-    const double v = vp.dot(dir);
-    return opt.rigid_slip > 0.0 ? -v / opt.rigid_slip : (v == 0.0 ? 0.0 : -v * dInfinity);
-  };
-  next[r + kShearX] = status_of(law(g.fx), cap);
-  next[r + kShearY] = status_of(law(g.fy), cap);
-  return true;
 }
 
 // After dWorldStep: the force of every guessed row and where its law puts it (next[]); returns

@@ -159,6 +159,10 @@ void SimOptions::validate() const {
           "SimOptions.friction = " + std::to_string(friction) +
               " must be finite and <= 10 (< 0 draws it from rigid)");
   require_in_range(o, "rigid_slip", rigid_slip, 0.0, 1.0);
+  require_in_range(o, "rigid_tyre_stiffness_x", rigid_tyre_stiffness_x, 0.0, 1e8);
+  require_in_range(o, "rigid_tyre_stiffness_y", rigid_tyre_stiffness_y, 0.0, 1e8);
+  // (> 0: with no damping a tyre without stiffness would be a perfectly sticking row)
+  require_in_range(o, "rigid_tyre_damping", rigid_tyre_damping, 1e-3, 1e8);
   require_in_range(o, "max_speed", max_speed, 1e-3, 1e6);
   require_in_range(o, "max_angular_speed", max_angular_speed, 1e-3, 1e7);
   require_in_range(o, "slip_force_tolerance", slip_force_tolerance, 1e-6, 1e9);
@@ -221,6 +225,13 @@ void RoverSim::Impl::build() {
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
   contact_erp = opt.rigid.erp(opt.dt);
   contact_cfm = opt.rigid.cfm(opt.dt);
+  lcp.exact_friction = opt.ground == GroundType::Rigid;  // Coulomb's cap for sliding tyres
+  for (int k = 0; k < 2; ++k) {  // the tyre's tangential spring–dampers as soft rows
+    const double stiffness = k == 0 ? opt.rigid_tyre_stiffness_x : opt.rigid_tyre_stiffness_y;
+    const double kh = stiffness * opt.dt + opt.rigid_tyre_damping;
+    tangential_cfm[k] = 1.0 / kh;
+    tangential_erp[k] = stiffness * opt.dt / kh;
+  }
 
   // Bodies in the nominal pose (rover frame = world, psi = phi = 0); reset() moves them.
   dMass m;
@@ -363,6 +374,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   row_mode.fill(kFree);
   row_mode_before.fill(kFree);
   alternating = false;
+  rigid_deflection.fill(Vec3::Zero());
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);
@@ -493,6 +505,8 @@ Snapshot RoverSim::snapshot() const {
   s.row_mode = impl_->row_mode;
   s.row_mode_before = impl_->row_mode_before;
   s.alternating = impl_->alternating;
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) s.rigid_deflection[i][k] = impl_->rigid_deflection[i][k];
   impl_->lcp.save(s.solver_patterns);
   s.valid = true;
   return s;
@@ -522,6 +536,8 @@ void RoverSim::restore(const Snapshot& s) {
   impl_->row_mode = s.row_mode;
   impl_->row_mode_before = s.row_mode_before;
   impl_->alternating = s.alternating;
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) impl_->rigid_deflection[i][k] = s.rigid_deflection[i][k];
   impl_->pending_force.setZero();
   impl_->diverged = false;
   impl_->start_current = false;

@@ -47,10 +47,20 @@ struct SimOptions {
   /// Coulomb friction of the obstacles and of rigid ground; < 0 draws it once from
   /// rigid.sample_friction(rng(seed)) ("per obstacle set").
   double friction = -1.0;
-  /// Tangential compliance of the tyre on rigid surfaces [(m/s)/N] (assumption, ours): ODE's
+  /// Tangential compliance of the tyre on rigid obstacles [(m/s)/N] (assumption, ours): ODE's
   /// force-dependent slip, so that wheels with slightly different rolling radii do not fight
   /// each other through perfectly sticking contacts. 1e-4 = 1 cm/s of creep at 100 N.
   double rigid_slip = 1e-4;
+  /// Tangential stiffness of each tyre on rigid ground [N/m], along its rolling direction and
+  /// along its axle, and the damping of both [N s/m] (assumptions, ours): a spring–damper per
+  /// friction direction capped by Coulomb's law (seed 004 §3.4), so a parked rover holds where the
+  /// friction cone allows and a constant force gives a constant deflection
+  /// (cpp/dynamics/rover_rigid.cpp). Longitudinal: §3.4's radial 20 kN/m. Lateral: ERNEST's
+  /// woven spring-mesh tyres (§2.1.1) give sideways; 1 kN/m lets the roll joint lift a wheel
+  /// against held wheels on hard ground (§2.2), whose contacts must scrub sideways to do so.
+  double rigid_tyre_stiffness_x = 20e3;
+  double rigid_tyre_stiffness_y = 1e3;
+  double rigid_tyre_damping = 1e3;
   /// Guess the active set of the bounded rows (motor limits, soil shear and compaction caps) from
   /// the previous step and verify it, instead of letting ODE's Dantzig solver pivot through it
   /// every step; a wrong guess is retried and finally solved by pivoting. The result is the same
@@ -170,6 +180,8 @@ struct Snapshot {
   // active-set outcomes of the last two steps (guesses for the next)
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;
+  /// Tangential deflection of each tyre on rigid ground (world, m; cpp/dynamics/rover_rigid.cpp).
+  std::array<std::array<double, 3>, 4> rigid_deflection{};
   /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
   /// of the steps that follow; internal layout, see cpp/dynamics/ode_lcp.hpp).
   std::vector<std::uint64_t> solver_patterns;

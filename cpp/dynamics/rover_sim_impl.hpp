@@ -66,7 +66,6 @@ constexpr int kMaxGuesses = 3;       // guesses of a step before failing rows ar
 // Below 1 mN a soil row is dropped: a CFM of eps / F would overflow the LCP as F -> 0.
 constexpr double kMinRowBound = 1e-3;
 constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
-constexpr double kStickMargin = 0.8;   // rigid friction above 0.8 mu F_n: solved bounded next step
 // Implicit slip (rover_step.cpp): at most kMaxSlipSolves solves of a step for its slip.
 constexpr int kMaxSlipSolves = 12;
 
@@ -116,6 +115,8 @@ struct RoverSim::Impl {
   soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
   double mu = 0.5;
   double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at opt.dt
+  // The tyre's along x and y on rigid ground (rover_rigid.cpp).
+  std::array<double, 2> tangential_erp{}, tangential_cfm{};
 
   dWorldID world = nullptr;
   dThreadingImplementationID threading = nullptr;
@@ -144,6 +145,9 @@ struct RoverSim::Impl {
   Eigen::Matrix<double, 8, 4> slip_response = Eigen::Matrix<double, 8, 4>::Zero();
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
+  // Rigid ground (rover_rigid.cpp): each tyre's tangential deflection (world, in the contact's
+  // tangent plane) at the start of the step (Snapshot) and at the end of the current attempt.
+  std::array<Vec3, 4> rigid_deflection{}, rigid_deflection_end{};
   std::array<bool, 2> stop_set{};  // the gimbal's yaw / roll stop is set (prepare_actuators)
   // The drives' AMotor parameters as last set (target rate, torque bound), NaN = never (emit()).
   std::array<std::array<double, 2>, 6> motor_set = [] {
@@ -210,13 +214,16 @@ struct RoverSim::Impl {
     int body1, body2;  // the row drives (w_1 - w_2) . axis
   };
   DriveRow drive_row(int k) const;
-  enum class RigidEmit { None, Guessed, Bounded };
-  RigidEmit rigid_emit(const std::int8_t* modes, int wheel) const;
   void emit(const std::int8_t* modes);
   void emit_ground(int wheel, const std::int8_t* modes, Vec3& wheel_force, Vec3& wheel_torque);
   bool settle(const std::int8_t* modes, std::int8_t* next);
+  // rover_rigid.cpp: rigid ground under the wheels
+  void prepare_rigid();
+  bool rigid_sticking(const std::int8_t* modes, int wheel) const;
+  void emit_rigid(int wheel, const std::int8_t* modes);
   bool settle_rigid(int wheel, const std::int8_t* modes, const Vec3& patch_velocity,
                     std::int8_t* next);
+  void commit_rigid();
   void save_bodies();
   void restore_bodies();
   void read_outputs(double dt_done);

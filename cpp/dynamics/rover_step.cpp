@@ -368,6 +368,7 @@ void RoverSim::Impl::step() {
   base_torque.fill(Vec3::Zero());
   prepare_actuators(psi, phi);
   prepare_ground();
+  if (opt.ground == GroundType::Rigid) prepare_rigid();
   prepare_obstacles();
   base_force[kChassis] += pending_force;
   pending_force.setZero();
@@ -474,6 +475,7 @@ void RoverSim::Impl::step() {
       sigma[i] = ground[i].active ? std::clamp(sigma[i] + step[i], -1.0, 1.0) : sigma[i];
   }
   if (!bmat.allFinite()) bmat.setZero();
+  if (opt.ground == GroundType::Rigid) commit_rigid();
   row_mode_before = row_mode;
   row_mode = next;
   ++stats.steps;

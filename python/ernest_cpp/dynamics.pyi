@@ -118,6 +118,9 @@ class SimOptions:
     rigid: RigidContactParameters
     friction: float
     rigid_slip: float
+    rigid_tyre_stiffness_x: float
+    rigid_tyre_stiffness_y: float
+    rigid_tyre_damping: float
     guess_active_set: bool
     sparse_lcp: bool
     max_speed: float

@@ -1,0 +1,122 @@
+// ERNEST on ODE: rigid ground under the wheels (seed 004 §3.4: a linear spring–damper normal
+// contact with Coulomb friction), its rows emitted for one attempt at a step and checked after
+// it. rover_step.cpp explains the guessed active set; rover_rows.cpp has the other rows.
+//
+// Friction. Coulomb's law holds a constant force without motion. ODE's force-dependent slip
+// (velocity = slip x force), used here before, is a viscous creep law instead: a rover parked on
+// a hard 15 deg slope with mu 0.7 crept downhill at 0.5 cm/s without end. Each tyre now has a
+// tangential spring–damper capped by Coulomb's law (per friction row, ODE's pyramid):
+//   lambda = -k d - c v_t,  |lambda| <= mu F_n,
+// v_t the tyre's slip velocity at the patch, d the spring's deflection: the slip accumulated while
+// the row sticks (d' = v_t); while it slides, the deflection that carries the sliding force
+// (d = -lambda / k), an elasto-plastic tyre. A constant force gives a constant deflection, not a
+// constant speed; the compliance that lets wheels of slightly different rolling radii share a
+// load instead of fighting stays. The deflection is a slip integral, not a point on the ground,
+// so a rolling wheel (v_t = 0) keeps it. As a soft ODE row, implicit in the step h:
+//   lambda = -k (d + h v_t) - c v_t:  motion = -(ERP / h) d, CFM = 1 / (h k + c), ERP = h k CFM.
+//
+// Rows of wheel i and their guesses: the normal row (pushing: the §3.4 spring–damper, bounded
+// below by zero and solved exactly by the sparse solver; guessed at 0: no contact). Both friction
+// rows inside mu F_n (sticking, the rolling wheel's usual case): unbounded spring–damper rows,
+// checked after the step. Otherwise (sliding): ODE's friction rows bounded by mu times the
+// contact's normal force (findex), which ode_lcp.cpp's hook resolves with the final normal force
+// (solve_coulomb), so the guessed and the bounded paths give the same Coulomb law.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "ernest/dynamics/rover_sim_impl.hpp"
+
+namespace ernest::dynamics {
+
+using namespace detail;
+
+// Deflections at the start of the step: in the contact's tangent plane, zero off the ground.
+void RoverSim::Impl::prepare_rigid() {
+  for (int i = 0; i < 4; ++i) {
+    const GroundContact& g = ground[i];
+    Vec3& d = rigid_deflection[i];
+    d = g.active ? Vec3(g.fx * d.dot(g.fx) + g.fy * d.dot(g.fy)) : Vec3(Vec3::Zero());
+    rigid_deflection_end[i].setZero();
+  }
+}
+
+// Whether wheel i's contact is emitted with its friction rows unbounded (guessed sticking).
+bool RoverSim::Impl::rigid_sticking(const std::int8_t* modes, int i) const {
+  return modes && modes[kRowsPerWheel * i + kShearX] == kFree &&
+         modes[kRowsPerWheel * i + kShearY] == kFree;
+}
+
+// The step's deflections become the next step's (after the accepted attempt).
+void RoverSim::Impl::commit_rigid() { rigid_deflection = rigid_deflection_end; }
+
+void RoverSim::Impl::emit_rigid(int i, const std::int8_t* modes) {
+  const GroundContact& g = ground[i];
+  if (modes && modes[kRowsPerWheel * i + kNormal] == kAtLo) return;  // guessed not pushing
+  const bool sticking = rigid_sticking(modes, i);
+  dContact ct;
+  std::memset(&ct, 0, sizeof ct);
+  for (int k = 0; k < 3; ++k) {
+    ct.geom.pos[k] = g.point[k];
+    ct.geom.normal[k] = g.n[k];
+    ct.fdir1[k] = g.fx[k];  // then ODE's second friction row is n × x = y
+  }
+  ct.geom.depth = g.depth;
+  ct.surface.mode = (sticking ? 0 : dContactApprox1) | dContactFDir1 | dContactSoftERP |
+                    dContactSoftCFM | dContactSlip1 | dContactSlip2 | dContactMotion1 |
+                    dContactMotion2;
+  ct.surface.mu = sticking ? dInfinity : mu;
+  ct.surface.soft_erp = contact_erp;
+  ct.surface.soft_cfm = contact_cfm;
+  ct.surface.slip1 = tangential_cfm[0];
+  ct.surface.slip2 = tangential_cfm[1];
+  ct.surface.motion1 = -tangential_erp[0] / opt.dt * rigid_deflection[i].dot(g.fx);
+  ct.surface.motion2 = -tangential_erp[1] / opt.dt * rigid_deflection[i].dot(g.fy);
+  dJointID j = dJointCreateContact(world, contacts, &ct);
+  dJointAttach(j, body[2 + i], nullptr);
+  dJointSetFeedback(j, &ground_fb[i]);
+}
+
+// After the step: the contact's forces, where its laws put each row (next[]) and the deflection
+// at the end of the step. Returns false if a guess was wrong: a missing contact that the spring
+// would push, or a sticking contact whose normal force is not positive or whose friction exceeds
+// mu times it. A bounded contact is right by construction (Coulomb's law, solve_coulomb).
+bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& vp,
+                                  std::int8_t* next) {
+  const GroundContact& g = ground[i];
+  const int r = kRowsPerWheel * i;
+  const double h = opt.dt;
+  if (modes && modes[r + kNormal] == kAtLo) {
+    const double push = contact_erp * g.depth / h - vp.dot(g.n);
+    next[r + kNormal] = push > 0.0 ? kFree : kAtLo;
+    next[r + kShearX] = next[r + kShearY] = kFree;
+    rigid_deflection_end[i].setZero();  // no contact: the tyre relaxes
+    return push <= 0.0;
+  }
+  const Vec3 f = to_vec(ground_fb[i].f1);
+  const double fn = f.dot(g.n);
+  row_force[r + kNormal] = fn;
+  next[r + kNormal] = fn > 0.0 ? kFree : kAtLo;
+  const double cap = mu * std::max(fn, 0.0);
+  bool inside = true;
+  Vec3 d_end = Vec3::Zero();
+  for (int k = 0; k < 2; ++k) {
+    const int row = r + (k == 0 ? kShearX : kShearY);
+    const Vec3& dir = k == 0 ? g.fx : g.fy;
+    const double d = rigid_deflection[i].dot(dir), v = vp.dot(dir);
+    const double lambda = f.dot(dir);
+    const double law = (-tangential_erp[k] / h * d - v) / tangential_cfm[k];  // unclamped force
+    const std::int8_t status = status_of(law, cap);
+    row_force[row] = lambda;
+    next[row] = status;
+    inside = inside && std::abs(lambda) <= cap;
+    // Sticking: the deflection grows by the step's slip; sliding: it carries the friction force.
+    const double k_t = k == 0 ? opt.rigid_tyre_stiffness_x : opt.rigid_tyre_stiffness_y;
+    d_end += dir * (status == kFree ? d + h * v : k_t > 0.0 ? -lambda / k_t : 0.0);
+  }
+  rigid_deflection_end[i] = d_end;
+  // The check is exact: |lambda| <= mu F_n, as Coulomb's law.
+  return !rigid_sticking(modes, i) || (fn > 0.0 && inside);
+}
+
+}  // namespace ernest::dynamics
