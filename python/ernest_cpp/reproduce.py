@@ -210,23 +210,22 @@ PAPER_OBSTACLES = {
 }
 
 
-def wheels_over(course: str, env, history) -> tuple[int, int]:
-    """(wheels over the obstacle at the end, wheels that were ever over it), from ground truth.
+def wheels_over(course: str, env) -> int:
+    """Wheels over the obstacle at the end of the episode, from the simulator's ground truth.
 
     Bickler trap: a wheel is over when its centre is past the far edge of the row of rocks.
-    Wheel-high step: when its centre is past the step's edge and at least a wheel radius above
-    the ground at the start (a wheel on top has its centre at the step height + radius)."""
+    Wheel-high step: when its centre is past the step's edge and more than half a wheel radius
+    above the step's top (a wheel on top has its centre a radius above it)."""
     wp_end = np.asarray(env.core.state["wheel_position"])
     sc = env.scenario
     if course == "bickler":
-        obs = np.asarray(sc.obstacles)
-        far = float(max(o[0] + 0.5 * o[3] for o in obs))
-        return int(np.sum(wp_end[:, 0] > far)), int(np.sum(wp_end[:, 0] > far))
+        far = float(max(o[0] + 0.5 * o[3] for o in np.asarray(sc.obstacles)))
+        return int(np.sum(wp_end[:, 0] > far))
     edge = float(sc.step_distance)
     z0 = float(sc.height(edge - 0.2, 0.0))
-    radius = 0.17
+    radius = 0.17  # seed 004 Table 1: wheel diameter 0.34 m
     on_top = (wp_end[:, 0] > edge) & (wp_end[:, 2] > z0 + sc.step_height + 0.5 * radius)
-    return int(np.sum(on_top)), int(np.sum(on_top))
+    return int(np.sum(on_top))
 
 
 def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float,
@@ -238,7 +237,7 @@ def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float,
         for name, (policy, passive) in ctrls.items():
             r = _pooled(env_id, {"episode_length": episode_length}, policy, passive, seeds,
                         f"§5 {course}", name, log, ev.run_episode)
-            counts = [wheels_over(course, x["env"], x["history"])[0] for x in r["runs"]]
+            counts = [wheels_over(course, x["env"]) for x in r["runs"]]
             r["wheels_over"] = counts
             r["crossed"] = all(c == 4 for c in counts)
             out[(course, name)] = r
