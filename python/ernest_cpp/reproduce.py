@@ -239,7 +239,7 @@ def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float,
                         f"§5 {course}", name, log, ev.run_episode)
             counts = [wheels_over(course, x["env"]) for x in r["runs"]]
             r["wheels_over"] = counts
-            r["crossed"] = all(c == 4 for c in counts)
+            r["crossed"] = 2 * sum(c == 4 for c in counts) >= len(counts)  # in most episodes
             out[(course, name)] = r
     return out
 
@@ -248,6 +248,14 @@ def obstacle_findings(res: dict) -> list[dict]:
     """Rows for §5.2–5.3 from ``res[(course, controller)] = {"crossed": bool, "wheels_over":
     [n per seed], "progress": m}``: holds when our outcome equals the paper's."""
     rows = []
+    r = res.get(("bickler", PASSIVE))
+    if r is not None:  # Fig. 17: the passive rover straddles the rocks, front wheels over
+        front = 2 * sum(c == 2 for c in r["wheels_over"]) >= len(r["wheels_over"])
+        rows.append({"id": "004.s5.bickler.passive_straddles", "statement": "Bickler trap: the "
+                     "passive bogie's front wheels pass, its rear wheels do not (2 of 4 over)",
+                     "paper": "front wheels pass, rear wheels do not (§5.2, Fig. 17)",
+                     "ours": f"wheels over {'/'.join(str(c) for c in r['wheels_over'])} of 4",
+                     "holds": front})
     for (course, name), (paper_crossed, paper_text) in PAPER_OBSTACLES.items():
         r = res.get((course, name))
         ours = None if r is None else r["crossed"]
@@ -611,7 +619,8 @@ def run(args: argparse.Namespace) -> int:
         md += ["## 2. Seed 004 §5.2–5.3: Bickler trap and wheel-high step", "",
                "`ernest/BicklerTrap-v0` (a row of 0.2 m rocks the rover straddles), "
                "`ernest/WheelStep-v0` (a 0.34 m step). Crossed = all four wheel centres past the "
-               "rocks' far edge / on top of the step at the end of the episode.", ""]
+               "rocks' far edge / on top of the step at the end of the episode, in most of the "
+               "episodes (wheels over: one count per seed).", ""]
         md += findings_table(rows) + [""]
         all_rows += rows
         log(f"      obstacles done in {time.perf_counter() - t0:.1f} s")

@@ -59,12 +59,14 @@ def test_obstacle_findings_follow_the_outcome():
            ("step", R.PASSIVE): {"crossed": False, "wheels_over": [0], "progress": 0.8}}
     rows = _by_id(R.obstacle_findings(res))
     assert rows["004.s5.bickler.passive"]["holds"] is True
+    assert rows["004.s5.bickler.passive_straddles"]["holds"] is True  # 2 wheels over
     assert rows["004.s5.bickler.learned"]["holds"] is True
     assert rows["004.s5.step.passive"]["holds"] is None  # the paper does not report it
     res[("bickler", R.PASSIVE)] = {"crossed": True, "wheels_over": [4], "progress": 9.0}
     res[("step", R.LEARNED)] = {"crossed": False, "wheels_over": [2], "progress": 1.0}
     rows = _by_id(R.obstacle_findings(res))
     assert rows["004.s5.bickler.passive"]["holds"] is False
+    assert rows["004.s5.bickler.passive_straddles"]["holds"] is False
     assert rows["004.s5.step.learned"]["holds"] is False
 
 
