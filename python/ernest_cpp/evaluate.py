@@ -1,4 +1,4 @@
-"""``ernest evaluate``: the passive bogie and the scripted gimbal controller (and optionally an
+"""``ernest evaluate``: the passive bogie and the scripted crawling gait (and optionally an
 exported policy) over the evaluation courses of seed 004 §5: Bickler trap, 20 deg slope on dry M90
 and on wet sand (Table 6), wheel-high step and a mixed course. Writes a markdown report with a
 metrics table, PNG plots and a short animation.
@@ -15,7 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 from . import envs as E
-from .envs.baselines import PassiveController, ScriptedGimbalController
+from .envs.baselines import CrawlingGaitController, PassiveController
 
 COURSES = [  # (label, env id, kwargs)
     ("Bickler trap (M90)", "ernest/BicklerTrap-v0", {}),
@@ -26,9 +26,16 @@ COURSES = [  # (label, env id, kwargs)
 ]
 
 
+#: The names ``ernest evaluate`` (and ``ernest reproduce``) give the controllers it compares.
+PASSIVE, CRAWLING, LEARNED = "passive bogie", "crawling gait", "learned policy"
+
+
 def controllers(policy_file: str | None):
-    out = {"passive bogie": (PassiveController(), True),
-           "scripted gimbal": (ScriptedGimbalController(), False)}
+    """{name: (policy(obs, env) -> action, passive)}: the passive bogie, the crawling gait of
+    seed 004 §5.5 (``envs.baselines.CrawlingGaitController``, its defaults) and, with a policy
+    file, the exported learned policy."""
+    out = {PASSIVE: (PassiveController(), True),
+           CRAWLING: (CrawlingGaitController(), False)}
     if policy_file:
         from .rl.export import load_policy  # TorchScript actor with its scaling (issue 6)
 
@@ -45,12 +52,17 @@ def controllers(policy_file: str | None):
                 cmd = module(torch.as_tensor(obs * scale, dtype=torch.float32)).numpy()
             return sensing.command_to_action(cmd.astype(np.float64))
 
-        out["learned policy"] = (learned, False)
+        out[LEARNED] = (learned, False)
     return out
 
 
 def run_episode(env_id: str, kwargs: dict, policy, passive: bool, seed: int):
+    """One episode of ``policy`` (its ``reset()`` called first, if it has one); returns
+    (metrics, history, unwrapped env, last info). ``kwargs`` go to ``gym.make`` (e.g. ``soil``,
+    ``episode_length``)."""
     env = gym.make(env_id, passive=passive, **kwargs)
+    if hasattr(policy, "reset"):
+        policy.reset()
     obs, _ = env.reset(seed=seed)
     while True:
         obs, _, term, trunc, info = env.step(policy(obs, env))
@@ -172,7 +184,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_video:
         from .envs.render import record_episode
 
-        name = "learned policy" if "learned policy" in ctrls else "scripted gimbal"
+        name = LEARNED if LEARNED in ctrls else CRAWLING
         policy, passive = ctrls[name]
         env = gym.make("ernest/Course-v0", passive=passive, render_mode="rgb_array")
         video = os.path.join(args.out, "course.gif")
@@ -189,7 +201,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("evaluate", help="passive vs scripted (vs learned) on the evaluation courses",
+    p = sub.add_parser("evaluate", help="passive bogie vs crawling gait (vs learned policy) on the "
+                       "evaluation courses",
                        description=__doc__)
     p.add_argument("--out", default="out/report", help="output folder (default: out/report)")
     p.add_argument("--seed", type=int, default=0)

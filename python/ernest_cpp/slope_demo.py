@@ -1,7 +1,9 @@
 """``ernest slope-demo``: ERNEST climbing a 20° M90 slope in simulation (seed 004 §5.5, Table 6),
-with the passive bogie (AGS off, clutch open) and with a simple scripted gimbal controller (a
-crawling gait: the roll joint shifts the load to one diagonal while the yaw joint swings the bogie,
-wheel speeds from the synchroniser of §2.3). Prints travel reduction (expected no-slip travel vs
+with the passive bogie (AGS off, clutch open) and with the scripted crawling gait
+(``envs.baselines.CrawlingGaitController``, the same gait ``ernest evaluate`` compares: the roll
+joint shifts the load to one side while the yaw joint swings the bogie; wheel speeds from the
+synchroniser of §2.3). This demo runs the gait at the physics rate on its own slope; ``ernest
+evaluate`` runs it at the environments' 2 Hz. Prints travel reduction (expected no-slip travel vs
 actual, as Table 6 defines it) and cost of transport (electrical energy / (m g d)), and writes plots
 of the path, the gimbal angles and the wheel loads.
 """
@@ -18,6 +20,7 @@ import numpy as np
 from . import dynamics as D
 from . import soil as _soil
 from ._core import envs as _envs
+from .envs.baselines import CrawlingGaitController
 
 SLOPE_DEG = 20.0
 
@@ -27,17 +30,25 @@ def _terrain(slope_deg: float) -> D.HeightMap:
     return D.HeightMap.slope(math.radians(slope_deg), 24.0, 8.0, 0.25, -4.0, -4.0)
 
 
-def run(controller: str, soil: str = "m90", duration: float = 60.0, vx: float = 0.1,
-        slope_deg: float = SLOPE_DEG, period: float = 8.0, yaw_amp_deg: float = 20.0,
-        roll_amp_deg: float = 6.0, eps_slip: float | None = None) -> dict[str, np.ndarray | float | str]:
-    """Simulate one controller ('passive' or 'gimbal'); returns time series and the metrics.
+CONTROLLERS = ("passive", "crawling")
 
-    ``eps_slip`` (eq 12's regularisation) defaults to the environments' value (1e4 (m/s)^-2, see
-    ``EnvOptions.eps_slip``) so this demo and ``ernest evaluate`` agree; 100 is Table 2's."""
-    if controller not in ("passive", "gimbal"):
-        raise ValueError(f"controller must be 'passive' or 'gimbal', got {controller!r}")
+
+def run(controller: str, soil: str = "m90", duration: float = 60.0, vx: float = 0.2,
+        slope_deg: float = SLOPE_DEG, gait: CrawlingGaitController | None = None,
+        eps_slip: float | None = None) -> dict[str, np.ndarray | float | str]:
+    """Simulate one controller ('passive' or 'crawling'); returns time series and the metrics.
+
+    ``gait``: the crawling gait (default ``CrawlingGaitController(speed=vx)``); its ``rates`` are
+    evaluated every ``gait.dt`` (the environments' 2 Hz) and held in between, as in ``ernest
+    evaluate``; the wheel speeds follow from the synchroniser every physics step. ``eps_slip`` (eq 12's regularisation) defaults to the environments' value
+    (1e4 (m/s)^-2, see ``EnvOptions.eps_slip``) so this demo and ``ernest evaluate`` agree; 100 is
+    Table 2's."""
+    if controller not in CONTROLLERS:
+        raise ValueError(f"controller must be one of {CONTROLLERS}, got {controller!r}")
     if duration <= 0 or vx <= 0:
         raise ValueError("duration and vx must be > 0")
+    if gait is None:
+        gait = CrawlingGaitController(speed=vx)
     params = _soil.soil_preset(soil)
     params.eps_slip = _envs.EnvOptions().eps_slip if eps_slip is None else float(eps_slip)
     sim = D.make_sim("soil", terrain=_terrain(slope_deg), soil=params)
@@ -46,29 +57,32 @@ def run(controller: str, soil: str = "m90", duration: float = 60.0, vx: float = 
     sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, vx)
     dt = sim.options.dt
     n = int(round(duration / dt))
-    w = 2.0 * math.pi / period
-    a_yaw, a_roll = math.radians(yaw_amp_deg), math.radians(roll_amp_deg)
     keys = ("t", "x", "y", "z", "psi", "phi", "roll_torque", "energy")
     rec = {k: np.zeros(n) for k in keys}
     loads = np.zeros((n, 4))
     fts_z = np.zeros((n, 4))
     start = sim.state.position.copy()
     expected = 0.0
+    hold = max(1, int(round(gait.dt / dt)))  # physics steps per gait command (the env's 2 Hz)
+    cmd = (gait.speed, 0.0, 0.0)
     for k in range(n):
         t = k * dt
         if controller == "passive":
             c = D.sync_commands(sim, vx, 0.0, 0.0, gimbal_enabled=False, clutch_engage=False)
         else:
-            # psi = A sin(w t), phi = -B cos(w t) (after a 2 s clutch alignment): the roll presses
-            # the wheel on the side the bogie swings away from, which anchors while the other
-            # advances; the synchroniser turns (Vx, psi_dot, phi_dot) into wheel speeds.
-            yaw_rate = a_yaw * w * math.cos(w * t)
-            roll_rate = a_roll * w * math.sin(w * t) if t > 2.0 else 0.0
-            c = D.sync_commands(sim, vx, yaw_rate, roll_rate, gimbal_enabled=True,
-                                clutch_engage=True)
+            # the crawling gait (envs.baselines), its command held for the gait's period as the
+            # environments hold a policy's: the roll presses the wheel on the side the bogie
+            # swings away from, which anchors while the other advances; the synchroniser turns
+            # (Vx, psi_dot, phi_dot) into wheel speeds every step. The slope runs along +x.
+            if k % hold == 0:
+                st = sim.state
+                cmd = gait.rates(t, hold * dt, yaw=st.gimbal_yaw, roll=st.gimbal_roll,
+                                 heading=st.yaw, lateral=st.position[1])
+            c = D.sync_commands(sim, *cmd, gimbal_enabled=True, clutch_engage=True)
         sim.set_commands(c)
         sim.step()
-        expected += vx * dt  # no-slip travel of the chassis at the commanded Vx
+        # no-slip travel of the chassis at the commanded Vx
+        expected += (vx if controller == "passive" else gait.speed) * dt
         s = sim.state
         rec["t"][k] = s.time
         rec["x"][k], rec["y"][k], rec["z"][k] = s.position
@@ -143,7 +157,7 @@ def main_args(args: argparse.Namespace) -> int:
     all_runs = {}
     for soil in soils:
         runs = [run(c, soil, args.duration, args.vx, eps_slip=args.eps_slip)
-                for c in ("passive", "gimbal")]
+                for c in CONTROLLERS]
         all_runs[soil] = runs
         for r in runs:
             m_d = D.RoverParameters().total_mass() * r["actual"]
@@ -174,14 +188,16 @@ def main_args(args: argparse.Namespace) -> int:
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser("slope-demo", help="passive bogie vs scripted gimbal gait on a 20° "
+    p = subparsers.add_parser("slope-demo", help="passive bogie vs the crawling gait on a 20° "
                               "slope (M90 and dry sand): travel reduction, cost of transport, plots",
                               description=__doc__)
     p.add_argument("--out", default="out/dynamics", help="output folder (default out/dynamics)")
     p.add_argument("--soils", default="m90,dry_sand",
                    help="comma-separated soil presets (default m90,dry_sand)")
     p.add_argument("--duration", type=float, default=60.0, help="simulated seconds (default 60)")
-    p.add_argument("--vx", type=float, default=0.1, help="commanded forward speed [m/s]")
+    p.add_argument("--vx", type=float, default=0.2,
+                   help="commanded forward speed [m/s] of both controllers (default 0.2, the "
+                        "crawling gait's and the evaluation's)")
     p.add_argument("--eps-slip", type=float, default=None,
                    help="eq 12 slip regularisation [(m/s)^-2] (default: the environments' 1e4; "
                         "Table 2's is 100)")

@@ -151,14 +151,14 @@ def test_motor_power_eq40():
 def test_slope_demo_metrics_follow_table6_definitions(tmp_path):
     from ernest_cpp import slope_demo
 
-    r = slope_demo.run("gimbal", "dry_sand", duration=4.0, vx=0.1)
+    r = slope_demo.run("crawling", "dry_sand", duration=4.0, vx=0.1)
     assert r["expected"] == pytest.approx(0.4, rel=1e-9)  # no-slip travel = Vx * t
     assert r["travel_reduction"] == pytest.approx((r["expected"] - r["actual"]) / r["expected"])
     assert r["energy_J"] > 0.0
     if r["actual"] > 0:
         m = D.RoverParameters().total_mass()
         assert r["cost_of_transport"] == pytest.approx(r["energy_J"] / (m * 9.81 * r["actual"]))
-    assert np.ptp(np.degrees(r["psi"])) > 10.0  # the scripted gait swings the bogie
+    assert np.ptp(np.degrees(r["psi"])) > 10.0  # the crawling gait swings the bogie
     p = slope_demo.run("passive", "m90", duration=2.0)
     assert np.abs(p["psi"]).max() < 0.01  # AGS off: yaw held by the brake (< 0.6 deg)
     with pytest.raises(ValueError, match="controller"):

@@ -10,7 +10,8 @@ from gymnasium.utils.env_checker import check_env
 import ernest_cpp.envs as E
 from ernest_cpp import sensing
 from ernest_cpp.cli import main as cli_main
-from ernest_cpp.envs.baselines import PassiveController, ScriptedGimbalController
+from ernest_cpp.envs.baselines import (CrawlingGaitController, LoadBalancingController,
+                                      PassiveController)
 from ernest_cpp.envs.render import record_episode
 
 
@@ -102,11 +103,11 @@ def test_flat_hard_ground_at_rest_and_driving_straight():
         assert info["path_progress"] == pytest.approx(before + info["progress"], abs=1e-9)
 
 
-def test_scripted_controller_returns_to_the_path_and_passive_does_not_steer():
+def test_load_balancing_controller_returns_to_the_path_and_passive_does_not_steer():
     # Start 1 m left of the path, heading along it: the scripted controller must steer right.
     env = gym.make("ernest/Flat-v0", rigid_ground=True)
     obs, _ = env.reset(seed=0)
-    ctrl = ScriptedGimbalController()
+    ctrl = LoadBalancingController()
     shifted = obs.copy()
     lat0 = env.unwrapped.core.scenario.path.lateral_deviation(0.0, 0.0)
     # Flat-v0 has no lateral offset; emulate one through the observation the controller sees.
@@ -123,13 +124,13 @@ def test_scripted_controller_returns_to_the_path_and_passive_does_not_steer():
     assert max(abs(p) for p in psi) < 1e-3
 
 
-def test_scripted_controller_closes_a_real_heading_error():
+def test_load_balancing_controller_closes_a_real_heading_error():
     env = gym.make("ernest/RockField-v0", rigid_ground=True,
                    randomisation={"max_rock_density": 0.0})
     obs, _ = env.reset(seed=3)
     u = env.unwrapped
     h0, d0 = u.heading_and_lateral()
-    ctrl = ScriptedGimbalController()
+    ctrl = LoadBalancingController()
     for _ in range(50):
         obs, *_ = env.step(ctrl(obs))
     h1, d1 = u.heading_and_lateral()
@@ -143,7 +144,7 @@ def test_render_and_record(tmp_path):
     frame = env.render()
     assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
     assert frame.std() > 10  # not a blank image
-    metrics = record_episode(env.unwrapped, ScriptedGimbalController(), str(tmp_path / "ep.gif"),
+    metrics = record_episode(env.unwrapped, CrawlingGaitController(), str(tmp_path / "ep.gif"),
                              seed=1, every=2, max_steps=6)
     assert (tmp_path / "ep.gif").stat().st_size > 1000 and "progress" in metrics
 
@@ -183,6 +184,66 @@ def test_evaluate_command_writes_a_report(tmp_path, capsys):
     for name in ("paths.png", "slope_gait.png", "metrics.png"):
         assert (out / name).stat().st_size > 1000
     assert "[10/10]" in capsys.readouterr().out
+    for name in ("passive bogie", "crawling gait"):
+        assert f"| 20 deg slope, dry M90 | {name} |" in text
+
+
+def test_evaluate_compares_passive_crawling_and_learned(tmp_path):
+    from ernest_cpp.evaluate import controllers
+    from ernest_cpp.rl.export import export_actor
+    from ernest_cpp.rl.networks import Actor
+
+    assert list(controllers(None)) == ["passive bogie", "crawling gait"]
+    path = str(tmp_path / "policy.pt")
+    export_actor(Actor(45, 3, 16), E.ErnestEnv("slope").observation_layout, path)
+    ctrls = controllers(path)
+    assert list(ctrls) == ["passive bogie", "crawling gait", "learned policy"]
+    assert [passive for _, passive in ctrls.values()] == [True, False, False]
+    assert isinstance(ctrls["crawling gait"][0], CrawlingGaitController)
+
+
+def test_crawling_gait_commands_yaw_and_roll_rates_and_restarts_each_episode():
+    env = gym.make("ernest/SlopeEval-v0", soil="m90", episode_length=12.0)
+    gait = CrawlingGaitController()
+    obs, _ = env.reset(seed=0)
+    actions = []
+    for _ in range(24):
+        a = gait(obs)
+        actions.append(a)
+        obs, *_ = env.step(a)
+    actions = np.array(actions)
+    assert np.all(actions[:, 0] == pytest.approx(1.0))  # full speed, 0.2 m/s
+    assert np.abs(actions[:, 1]).max() > 0.5 and np.abs(actions[:, 2]).max() > 0.1
+    assert np.all(np.abs(actions) <= 1.0)
+    # the yaw joint follows the gait: it swings both ways
+    yaw = [h["gimbal_yaw"] for h in env.unwrapped.history]
+    assert max(yaw) > math.radians(8) and min(yaw) < -math.radians(8)
+    # a new episode restarts the clock (detected from the standing-still action in obs)
+    obs, _ = env.reset(seed=0)
+    np.testing.assert_allclose(gait(obs), actions[0])
+    gait.reset()
+    assert gait.calls == 0
+    # the gait function itself: mean rates over [t, t + dt] reach the desired angles
+    g = CrawlingGaitController(period=8.0, yaw_amplitude_deg=10.0, roll_amplitude_deg=5.0,
+                               align_time=2.0)
+    psi0, phi0 = g.angles(3.0)
+    v, yr, rr = g.rates(3.0, 0.5)
+    psi1, phi1 = g.angles(3.5)
+    assert v == pytest.approx(0.2)
+    assert yr == pytest.approx((psi1 - psi0) / 0.5) and rr == pytest.approx((phi1 - phi0) / 0.5)
+    assert g.angles(1.0)[1] == 0.0  # clutch alignment: no roll yet
+    with pytest.raises(ValueError):
+        CrawlingGaitController(speed=0.0)
+
+
+def test_crawling_gait_climbs_the_dry_slope_better_than_the_passive_bogie():
+    from ernest_cpp.evaluate import run_episode
+
+    m_p, *_ = run_episode("ernest/SlopeEval-v0", {"soil": "m90"}, PassiveController(), True, 0)
+    m_c, *_ = run_episode("ernest/SlopeEval-v0", {"soil": "m90"}, CrawlingGaitController(), False, 0)
+    assert m_c["progress"] > m_p["progress"]
+    assert m_c["travel_reduction"] < m_p["travel_reduction"]
+    assert m_c["cost_of_transport"] < m_p["cost_of_transport"]
 
 
 def test_evaluate_runs_an_exported_policy(tmp_path):

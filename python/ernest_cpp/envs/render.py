@@ -116,6 +116,8 @@ def write_animation(frames: list[np.ndarray], path: str, fps: float = 4.0) -> st
 def record_episode(env, policy, path: str, seed: int = 0, every: int = 1, max_steps: int = 10_000,
                    fps: float = 4.0) -> dict:
     """Run one episode of ``policy(obs, env) -> action`` and write an animation of it."""
+    if hasattr(policy, "reset"):
+        policy.reset()
     obs, _ = env.reset(seed=seed)
     frames = [render_frame(env)]
     for k in range(max_steps):
