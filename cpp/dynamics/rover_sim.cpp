@@ -370,7 +370,6 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   shear_x.fill(0.0);
   shear_y.fill(0.0);
   compaction.fill(0.0);
-  slip_response.setZero();
   row_mode.fill(kFree);
   row_mode_before.fill(kFree);
   alternating = false;
@@ -501,7 +500,6 @@ Snapshot RoverSim::snapshot() const {
   s.shear_x = impl_->shear_x;
   s.shear_y = impl_->shear_y;
   s.compaction = impl_->compaction;
-  std::copy(impl_->slip_response.data(), impl_->slip_response.data() + 32, s.slip_response.begin());
   s.row_mode = impl_->row_mode;
   s.row_mode_before = impl_->row_mode_before;
   s.alternating = impl_->alternating;
@@ -532,7 +530,6 @@ void RoverSim::restore(const Snapshot& s) {
   impl_->shear_x = s.shear_x;
   impl_->shear_y = s.shear_y;
   impl_->compaction = s.compaction;
-  std::copy(s.slip_response.begin(), s.slip_response.end(), impl_->slip_response.data());
   impl_->row_mode = s.row_mode;
   impl_->row_mode_before = s.row_mode_before;
   impl_->alternating = s.alternating;

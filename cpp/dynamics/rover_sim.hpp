@@ -73,12 +73,12 @@ struct SimOptions {
   /// steps still go to ODE. The same solution to rounding; false: ODE's solver for every step.
   bool sparse_lcp = true;
   /// Implicit slip (cpp/dynamics/rover_step.cpp) [N]: a step on soil is solved again, with new
-  /// slip ratios, until the soil's row bounds and explicit forces at the slip eq 12 gives at the
-  /// end of the step are within this of those the step used (axle torques as forces at the
-  /// wheel radius; at most 12 solves). The default keeps the evaluation courses within 2 pp /
-  /// 5 % of a 4x smaller step (benchmarks/RESULTS.md, "step independence"); 1e9 takes the slip
-  /// from the start of the step (explicit: a stalled wheel chatters at the step rate).
-  double slip_force_tolerance = 1.0;
+  /// slip ratios, until every wheel's slip agrees with eq 12 at the end of the step to 2e-3, or
+  /// the soil's row bounds and explicit forces at that end slip are within this of those the
+  /// step used (axle torques as forces at the wheel radius); at most 12 solves. Step
+  /// independence at 0.1 N and its cost: benchmarks/RESULTS.md, "step independence". 1e9 takes
+  /// the slip from the start of the step (explicit: a stalled wheel chatters at the step rate).
+  double slip_force_tolerance = 0.1;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
   void validate() const;
@@ -174,9 +174,6 @@ struct Snapshot {
   Commands commands{};
   std::array<double, 4> shear_x{}, shear_y{};  // implicit shear levels of the last step
   std::array<double, 4> compaction{};          // implicit compaction force of the last step
-  /// The implicit slip's estimate of d(wheel velocities) / d(slips) (Broyden, column-major
-  /// 8 x 4) left by the last step.
-  std::array<double, 32> slip_response{};
   // active-set outcomes of the last two steps (guesses for the next)
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;

@@ -68,6 +68,7 @@ constexpr double kMinRowBound = 1e-3;
 constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
 // Implicit slip (rover_step.cpp): at most kMaxSlipSolves solves of a step for its slip.
 constexpr int kMaxSlipSolves = 12;
+constexpr double kSlipTolerance = 2e-3;  // slips this close to eq 12's end value: accepted
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
 
@@ -140,9 +141,6 @@ struct RoverSim::Impl {
   RoverState st{};
   // Implicit levels reached last step, used by this step's explicit terms; and the row guesses.
   std::array<double, 4> shear_x{}, shear_y{}, compaction{};
-  // d(end-of-step v_x, v_cx of each wheel) / d(slip used), Broyden's estimate carried from
-  // step to step (the implicit slip, rover_step.cpp).
-  Eigen::Matrix<double, 8, 4> slip_response = Eigen::Matrix<double, 8, 4>::Zero();
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
   // Rigid ground (rover_rigid.cpp): each tyre's tangential deflection (world, in the contact's

@@ -400,25 +400,17 @@ void RoverSim::Impl::step() {
   // within SimOptions::slip_force_tolerance of the soil forces the slip sets (soil_terms_gap:
   // a slip error where the forces do not depend on it costs no solve). The wheels share the
   // chassis, so the residual
-  // r(sigma) = s_end - sigma couples them. Newton's method on the four slips with
-  // J = (d s_end / d v) B - I: the steep part, eq 12's derivative at the end velocities, is
-  // exact, and B = d v / d sigma (each wheel's v_x and v_cx at the end of the step against the
-  // slips used: smooth, set by the rover's masses and the soil's slip sensitivity) is Broyden's
-  // estimate, carried from step to step (slip_response; 0 at first, when the first update is the
-  // fixed-point step, eq 12 at the end). Slips are clamped to [-1, 1]. After kMaxSlipSolves
-  // solves the step is solved once more at the best slips seen.
+  // r(sigma) = s_end - sigma couples them: Broyden's method on the four slips from J = -I (the
+  // first update is the fixed-point step, eq 12 at the end), clamped to [-1, 1]. A step is also
+  // accepted when its slips agree with eq 12 to kSlipTolerance, whatever the forces. After
+  // kMaxSlipSolves solves the step is solved once more at the best slips seen.
   const bool soft = opt.ground == GroundType::Soil;
-  using Vec8 = Eigen::Matrix<double, 8, 1>;
-  Eigen::Vector4d sigma, best_sigma, res, prev_sigma;
-  Vec8 vend, prev_v;
+  Eigen::Vector4d sigma, best_sigma, res, prev_sigma, prev_res;
   for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
-  Eigen::Matrix<double, 8, 4>& bmat = slip_response;
+  Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
   double best = std::numeric_limits<double>::infinity();
   bool held = false;
   int attempts = 0;
-  const auto eq12 = [&](double vx, double vcx) {
-    return soil::slip_ratio(vx, vcx, opt.soil.eps_slip, opt.soil.slip_clamp_first);
-  };
   for (int solve = 0;; ++solve) {
     if (solve > 0) {
       restore_bodies();
@@ -431,24 +423,17 @@ void RoverSim::Impl::step() {
     held = solve_rows(guess, next, tried, attempts);
     if (!soft || solve > kMaxSlipSolves) break;
     double worst = 0.0;  // [N]: the implicit-slip error as a force (soil_terms_gap)
-    vend.setZero();
     for (int i = 0; i < 4; ++i) {
       res[i] = 0.0;
       if (!ground[i].active) continue;
-      end_velocity(i, vend[2 * i], vend[2 * i + 1]);
-      const double s_end = eq12(vend[2 * i], vend[2 * i + 1]);
+      double vx = 0.0, vcx = 0.0;
+      end_velocity(i, vx, vcx);
+      const double s_end =
+          soil::slip_ratio(vx, vcx, opt.soil.eps_slip, opt.soil.slip_clamp_first);
       res[i] = s_end - sigma[i];
-      if (res[i] != 0.0) worst = std::max(worst, soil_terms_gap(i, s_end));
+      if (std::abs(res[i]) > kSlipTolerance) worst = std::max(worst, soil_terms_gap(i, s_end));
     }
-    if (solve > 0) {  // Broyden's rank-one update of B with the last change of sigma
-      const Eigen::Vector4d ds = sigma - prev_sigma;
-      const double n2 = ds.squaredNorm();
-      if (n2 > 0.0) bmat += (vend - prev_v - bmat * ds) * ds.transpose() / n2;
-    }
-    // The tolerance doubles with every solve past the second: where the step's active set
-    // changes with the slips (a row reaching its bound), the map from slips to end velocities
-    // has kinks on which Newton's method can cycle; this bounds the cost of such steps.
-    if (worst <= std::ldexp(opt.slip_force_tolerance, std::max(0, solve - 2))) break;
+    if (worst <= opt.slip_force_tolerance) break;
     if (worst < best) {
       best = worst;
       best_sigma = sigma;
@@ -458,23 +443,18 @@ void RoverSim::Impl::step() {
       continue;
     }
     if (solve == kMaxSlipSolves) break;
-    prev_sigma = sigma;
-    prev_v = vend;
-    Eigen::Matrix<double, 4, 8> dsdv = Eigen::Matrix<double, 4, 8>::Zero();
-    constexpr double h = 1e-7;  // [m/s] central differences of eq 12
-    for (int i = 0; i < 4; ++i) {
-      if (!ground[i].active) continue;
-      const double vx = vend[2 * i], vcx = vend[2 * i + 1];
-      dsdv(i, 2 * i) = (eq12(vx + h, vcx) - eq12(vx - h, vcx)) / (2 * h);
-      dsdv(i, 2 * i + 1) = (eq12(vx, vcx + h) - eq12(vx, vcx - h)) / (2 * h);
+    if (solve > 0) {  // Broyden's rank-one update with the last change of sigma
+      const Eigen::Vector4d ds = sigma - prev_sigma, dr = res - prev_res;
+      const double n2 = ds.squaredNorm();
+      if (n2 > 0.0) jac += (dr - jac * ds) * ds.transpose() / n2;
     }
-    const Eigen::Matrix4d jac = dsdv * bmat - Eigen::Matrix4d::Identity();
+    prev_sigma = sigma;
+    prev_res = res;
     Eigen::Vector4d step = jac.partialPivLu().solve(-res);
     if (!step.allFinite()) step = res;  // singular: the fixed-point step
     for (int i = 0; i < 4; ++i)
       sigma[i] = ground[i].active ? std::clamp(sigma[i] + step[i], -1.0, 1.0) : sigma[i];
   }
-  if (!bmat.allFinite()) bmat.setZero();
   if (opt.ground == GroundType::Rigid) commit_rigid();
   row_mode_before = row_mode;
   row_mode = next;
