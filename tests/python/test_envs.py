@@ -246,6 +246,19 @@ def test_crawling_gait_climbs_the_dry_slope_better_than_the_passive_bogie():
     assert m_c["cost_of_transport"] < m_p["cost_of_transport"]
 
 
+def test_wet_sand_immobilises_the_passive_bogie_while_the_crawling_gait_climbs():
+    # Seed 004 Table 6 / §5.5: on the 20 deg wet slope the passive bogie makes no net progress in
+    # 60 s (travel reduction 100 %); a gimbal gait still climbs. Ours at dt and at dt / 4.
+    from ernest_cpp.evaluate import run_episode
+
+    for dt in (0.025, 0.00625):
+        kw = {"soil": "wet_sand", "physics_dt": dt}
+        m_p, *_ = run_episode("ernest/SlopeEval-v0", kw, PassiveController(), True, 0)
+        m_c, *_ = run_episode("ernest/SlopeEval-v0", kw, CrawlingGaitController(), False, 0)
+        assert m_p["travel_reduction"] >= 0.95 and m_p["progress"] <= 0.0
+        assert m_c["progress"] > 3.0 and m_c["travel_reduction"] < 0.7
+
+
 def test_evaluate_runs_an_exported_policy(tmp_path):
     # A randomly initialised actor exported like a trained one: the evaluator feeds it physical
     # observations (obs * scale) and maps its physical command back to a normalised action.
