@@ -28,7 +28,23 @@ import numpy as np
 
 #: One-line measured reasons for findings that do not hold, keyed by row id (the ``id`` column of
 #: the report). Fill from measurements; a row that holds never shows its reason.
-REASONS: dict[str, str] = {}
+REASONS: dict[str, str] = {
+    "004.t6.gap_cot": "our passive bogie makes no progress on dry M90 either (it slides back, "
+                      "travel reduction > 100 %), so its CoT is infinite on both soils and the "
+                      "ratio cannot grow; see 004.rig.m90_slope",
+    "004.rig.m90_slope": "Table 2's M90 in our Bekker-Wong gives a peak drawbar pull of 0.29 W "
+                         "on the rig, below the 0.36 W a 20 deg slope needs: the passive bogie "
+                         "cannot climb it in steady state (measured: it slides back at ~5 mm/s "
+                         "with its wheels spinning); the paper's 81.9 % needs a stronger soil",
+    "004.rig.wet_slope": "the rig's peak (s = 0.85) needs the wheel centre moving; on the slope "
+                         "the stalled rover drifts back at ~5 mm/s, where eq 12's factor "
+                         "1 - exp(-eps_slip vx^2) caps |s| at 0.2 (measured s = -0.205 on every "
+                         "wheel), so the rover never reaches the rig's pull",
+    "004.s5.bickler.passive_straddles": "the trap's boxes stand 0.20 m, above the 0.17 m wheel "
+                                        "radius: our front wheels stall against their faces "
+                                        "(measured: 0 wheels over, 0.85 m progress in 60 s), "
+                                        "none gets on top to straddle",
+}
 
 #: What a missing reason says (the row id tells which key of ``REASONS`` to fill).
 REASON_PLACEHOLDER = "reason not measured yet (reproduce.REASONS[{id!r}])"
