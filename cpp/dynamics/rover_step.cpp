@@ -405,8 +405,9 @@ void RoverSim::Impl::step() {
   // accepted when its slips agree with eq 12 to kSlipTolerance, whatever the forces. After
   // kMaxSlipSolves solves the step is solved once more at the best slips seen.
   const bool soft = opt.ground == GroundType::Soil;
-  Eigen::Vector4d sigma, best_sigma, res, prev_sigma, prev_res;
+  Eigen::Vector4d sigma, res = Eigen::Vector4d::Zero();
   for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
+  Eigen::Vector4d best_sigma = sigma, prev_sigma = sigma, prev_res = res;
   Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
   double best = std::numeric_limits<double>::infinity();
   bool held = false;
