@@ -40,6 +40,10 @@ REASONS: dict[str, str] = {
                          "the stalled rover drifts back at ~5 mm/s, where eq 12's factor "
                          "1 - exp(-eps_slip vx^2) caps |s| at 0.2 (measured s = -0.205 on every "
                          "wheel), so the rover never reaches the rig's pull",
+    "004.s5.step.learned": "the default policy is the quick preset's (30 000 transitions per "
+                           "specialist, not converged, policies/TRAINING.md): it gets the front "
+                           "wheels up the 0.34 m step (2 of 4 over in every seed) but not the "
+                           "rear ones; the same at dt / 4",
     "004.s5.bickler.passive_straddles": "the trap's boxes stand 0.20 m, above the 0.17 m wheel "
                                         "radius: our front wheels stall against their faces "
                                         "(measured: 0 wheels over, 0.85 m progress in 60 s), "
