@@ -398,12 +398,11 @@ void RoverSim::Impl::step() {
   // with the step (benchmarks/RESULTS.md, "step independence"). So a step is solved with slips
   // sigma (one per wheel) and accepted when eq 12 at its end velocities gives back sigma, to
   // within SimOptions::slip_force_tolerance of the soil forces the slip sets (soil_terms_gap:
-  // a slip error where the forces do not depend on it costs no solve). The wheels share the
-  // chassis, so the residual
-  // r(sigma) = s_end - sigma couples them: Broyden's method on the four slips from J = -I (the
-  // first update is the fixed-point step, eq 12 at the end), clamped to [-1, 1]. A step is also
-  // accepted when its slips agree with eq 12 to kSlipTolerance, whatever the forces. After
-  // kMaxSlipSolves solves the step is solved once more at the best slips seen.
+  // a slip error where the forces do not depend on it costs no solve), or when the slips agree
+  // to kSlipTolerance. The wheels share the chassis, so the residual r(sigma) = s_end - sigma
+  // couples them: Broyden's method on the four slips from J = -I (the first update is the
+  // fixed-point step, eq 12 at the end), clamped to [-1, 1]. After kMaxSlipSolves solves the
+  // step is solved once more at the best slips seen.
   const bool soft = opt.ground == GroundType::Soil;
   Eigen::Vector4d sigma, res = Eigen::Vector4d::Zero();
   for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
