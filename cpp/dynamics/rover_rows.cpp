@@ -69,7 +69,7 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
     return;
   }
   // Soft soil: the explicit share of the axle torque (soil_terms), then the rows.
-  tw += g.torque;
+  tw += g.axle * g.axle_torque;
   // (c) Normal force F_n = max(0, F_z - c v_n): a damper around the soil's pressure force that
   //     never pulls; lambda = (motion - v_n) / cfm with motion = F_z / c, cfm = 1 / c. Guessed
   //     at 0 (the wheel leaves the soil faster than F_z / c): no row, no force.

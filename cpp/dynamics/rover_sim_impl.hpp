@@ -91,9 +91,8 @@ struct GroundContact {
   Vec3 n = Vec3::UnitZ(), fx = Vec3::UnitX(), fy = Vec3::UnitY(), axle = Vec3::UnitY();
   double depth = 0.0;
   // soft soil: bounds of the implicit rows and the explicit normal force (eqs 28–32), and the
-  // explicit share of the soil's axle torque (world), all at the slip of the current attempt
-  double ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0;
-  Vec3 torque = Vec3::Zero();
+  // explicit share of the soil's axle torque (about `axle`), all at the slip of the attempt
+  double ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0, axle_torque = 0.0;
   soil::ContactState cs{};  // eq 12–32 inputs at the start of the step (Fig. 7 frame)
 };
 

@@ -166,7 +166,7 @@ void RoverSim::Impl::prepare_ground() {
     g.cs = soil::ContactState{dp.depth, vx != 0.0 ? vx : 1e-12, vc.dot(g.fy), st.contact_vx[i],
                               st.contact_vy[i]};
     // First guess of the step's slip: eq 12 at the start of the step (see step()).
-    soil_terms(i, soil::slip_ratio(g.cs.vx, g.cs.vcx, opt.soil.eps_slip, opt.soil.slip_clamp_first));
+    soil_terms(i, soil.slip_ratio(g.cs.vx, g.cs.vcx));
   }
 }
 
@@ -212,7 +212,7 @@ void RoverSim::Impl::soil_terms(int i, double slip) {
   g.ay = t.ay;
   g.comp = t.comp;
   g.fz = t.fz;
-  g.torque = g.axle * t.axle_torque;
+  g.axle_torque = t.axle_torque;
 }
 
 // How far the soil terms of the step (at the slip it used) are from those at the slip eq 12
@@ -221,9 +221,8 @@ void RoverSim::Impl::soil_terms(int i, double slip) {
 double RoverSim::Impl::soil_terms_gap(int i, double end_slip) const {
   const GroundContact& g = ground[i];
   const SoilTerms t = soil_terms_at(i, end_slip);
-  const double torque_now = g.torque.dot(g.axle);
   return std::max({std::abs(t.ax - g.ax), std::abs(t.ay - g.ay), std::abs(t.comp - g.comp),
-                   std::abs(t.fz - g.fz), std::abs(t.axle_torque - torque_now) / p.wheel_radius});
+                   std::abs(t.fz - g.fz), std::abs(t.axle_torque - g.axle_torque) / p.wheel_radius});
 }
 
 // Eq 12's inputs at the end of an attempt: the wheel centre's and the contact point's
@@ -428,8 +427,7 @@ void RoverSim::Impl::step() {
       if (!ground[i].active) continue;
       double vx = 0.0, vcx = 0.0;
       end_velocity(i, vx, vcx);
-      const double s_end =
-          soil::slip_ratio(vx, vcx, opt.soil.eps_slip, opt.soil.slip_clamp_first);
+      const double s_end = soil.slip_ratio(vx, vcx);
       res[i] = s_end - sigma[i];
       if (std::abs(res[i]) > kSlipTolerance) worst = std::max(worst, soil_terms_gap(i, s_end));
     }

@@ -117,7 +117,7 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
   const double r = wheel_.radius, b = wheel_.width;
   SoilSplit out;
   if (slip) require_finite("BekkerWongModel::split", "slip", *slip);
-  const double s = slip ? clamp_unit(*slip) : slip_ratio(st.vx, st.vcx, p.eps_slip, p.slip_clamp_first);  // eq 12
+  const double s = slip ? clamp_unit(*slip) : slip_ratio(st.vx, st.vcx);  // eq 12
   out.slip = s;
   if (!(st.sinkage > 0.0)) return out;  // above the ground: no force
 
@@ -228,6 +228,10 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
   out.torque_shear = r * r * b * s_tau;
   if (lateral) out.fy_shear = r * b * s_tau_y;  // eq 31
   return out;
+}
+
+double BekkerWongModel::slip_ratio(double vx, double vcx) const {
+  return soil::slip_ratio(vx, vcx, soil_.eps_slip, soil_.slip_clamp_first);
 }
 
 SoilSplit BekkerWongModel::split(const ContactState& state) const {

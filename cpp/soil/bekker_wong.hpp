@@ -75,6 +75,9 @@ class BekkerWongModel {
   /// the slip and checks it against eq 12 afterwards (cpp/dynamics/rover_step.cpp).
   SoilSplit split(const ContactState& state, double slip) const;
 
+  /// Eq 12 with this model's eps_slip and slip_clamp_first (as evaluate() and split() use it).
+  double slip_ratio(double vx, double vcx) const;
+
   /// Batch evaluation for the simulator's hot loop. `states` rows are
   /// (sinkage, vx, vy, vcx, vcy); `forces` rows receive (fx, fy, fz, axle_torque).
   void evaluate_batch(const Eigen::Ref<const Eigen::Matrix<double, Eigen::Dynamic, 5, Eigen::RowMajor>>& states,
