@@ -74,16 +74,9 @@ void RoverSim::Impl::read_outputs(double dt) {
     st.fts[i].tail<3>() = rp.transpose() * torque_s;
     // Ground normal load and the implicit levels for the next step's explicit terms.
     const GroundContact& g = ground[i];
-    st.wheel_load[i] = 0.0;
-    shear_x[i] = shear_y[i] = compaction[i] = 0.0;
-    if (dt > 0.0 && g.active) {
-      st.wheel_load[i] = row_force[kRowsPerWheel * i + kNormal];
-      if (opt.ground == GroundType::Soil) {
-        shear_x[i] = g.ax >= kMinRowBound ? clamp_unit(row_force[kRowsPerWheel * i + kShearX] / g.ax) : 0.0;
-        shear_y[i] = g.ay >= kMinRowBound ? clamp_unit(row_force[kRowsPerWheel * i + kShearY] / g.ay) : 0.0;
-        compaction[i] = row_force[kRowsPerWheel * i + kCompaction];
-      }
-    }
+    st.wheel_load[i] = dt > 0.0 && g.active ? row_force[kRowsPerWheel * i + kNormal] : 0.0;
+    if (dt > 0.0) soil_levels(i);
+    else shear_x[i] = shear_y[i] = compaction[i] = 0.0;
   }
   // Electrical power (eq 40) and energy (positive power only: the drives do not regenerate).
   for (int i = 0; i < 4; ++i) {

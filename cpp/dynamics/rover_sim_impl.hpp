@@ -138,7 +138,9 @@ struct RoverSim::Impl {
 
   Commands cmd{};
   RoverState st{};
-  // Implicit levels reached last step, used by this step's explicit terms; and the row guesses.
+  // The soil rows' levels (shear used / shear cap, compaction force) that the soil's remaining
+  // terms (eq 32's shear part, the axle torque) are evaluated at: the step's own, solved with the
+  // slip (rover_step.cpp); and the row guesses.
   std::array<double, 4> shear_x{}, shear_y{}, compaction{};
   std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
@@ -200,6 +202,7 @@ struct RoverSim::Impl {
   void soil_terms(int wheel, double slip);
   double soil_terms_gap(int wheel, double end_slip) const;
   void end_velocity(int wheel, double& vx, double& vcx) const;
+  void soil_levels(int wheel);
   bool solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess,
                   std::array<std::int8_t, kGuessedRowCount>& next,
                   std::array<std::int8_t, kGuessedRowCount>& tried, int& attempts);

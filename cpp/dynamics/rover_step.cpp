@@ -178,9 +178,13 @@ void RoverSim::Impl::prepare_ground() {
 // (b) the compaction resistance -sign(v_x) rb int sigma sin (eq 30), whose regularised sign
 //     clamp(v_x / eps_direction) is the same kind of law on the wheel-centre velocity: a
 //     linear-motor row with CFM = eps_direction / F and bounds +-F;
-// (c) the normal force (eq 32, with the shear's normal part at last step's level) as the target
-//     of the contact's normal row, a damper that never pulls: F_n = max(0, F_z - c v_n);
-// (d) explicit: the share of the axle torque the rows do not produce, at last step's levels.
+// (c) the normal force (eq 32, with the shear's normal part at the shear row's level) as the
+//     target of the contact's normal row, a damper that never pulls: F_n = max(0, F_z - c v_n);
+// (d) explicit forces: the share of the axle torque the rows do not produce, at the rows' levels.
+// The levels (shear_x, compaction) are the step's own: solved together with the slip in step().
+// Taken from the previous step instead they lag by one step, and where the rover rocks against an
+// obstacle or on a ripple that lag made the energy converge only at first order in the step
+// (benchmarks/RESULTS.md, "step independence").
 // Treated explicitly, (a) and (b) are stiff dampers (~1e4 N s/m) unstable at any useful step.
 // The slip itself is chosen by step() so that it matches eq 12 at the end of the step.
 RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) const {
@@ -199,7 +203,7 @@ RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) cons
   const double row_torque = arm * t.ax * sx;
   const double soil_torque = -s.torque_shear * sx;  // the soil applies -axle_torque
   // The compaction row acts at the wheel centre; its moment about the axle (at the patch) is
-  // added with last step's level.
+  // added at the row's level.
   t.axle_torque = soil_torque - row_torque + arm * compaction[i];
   return t;
 }
@@ -225,6 +229,19 @@ double RoverSim::Impl::soil_terms_gap(int i, double end_slip) const {
                    std::abs(t.fz - g.fz), std::abs(t.axle_torque - g.axle_torque) / p.wheel_radius});
 }
 
+// The levels the soil rows of wheel i reached in the last solve (row_force, from settle()): the
+// shear used as a fraction of its cap and the compaction force. The soil's terms that the rows do
+// not produce (eq 32's shear part of the normal force, the axle torque) are evaluated at them.
+void RoverSim::Impl::soil_levels(int i) {
+  const GroundContact& g = ground[i];
+  shear_x[i] = shear_y[i] = compaction[i] = 0.0;
+  if (!g.active || opt.ground != GroundType::Soil) return;
+  const double* f = &row_force[kRowsPerWheel * i];
+  shear_x[i] = g.ax >= kMinRowBound ? clamp_unit(f[kShearX] / g.ax) : 0.0;
+  shear_y[i] = g.ay >= kMinRowBound ? clamp_unit(f[kShearY] / g.ay) : 0.0;
+  compaction[i] = f[kCompaction];
+}
+
 // Eq 12's inputs at the end of an attempt: the wheel centre's and the contact point's
 // longitudinal velocities ODE reached, in the step's contact frame.
 void RoverSim::Impl::end_velocity(int i, double& vx, double& vcx) const {
@@ -241,14 +258,19 @@ void RoverSim::Impl::near(dGeomID a, dGeomID b) {
   std::memset(cs, 0, sizeof cs);
   const int n = dCollide(a, b, kMaxContactsPerPair, &cs[0].geom, sizeof(dContact));
   if (n <= 0) return;
-  // The §3.4 stiffness is per wheel–obstacle contact: n simultaneous points share it.
+  // The §3.4 stiffness is per wheel–obstacle contact: n simultaneous points share it, and so they
+  // share the force-dependent slip (n points in parallel, each slipping at slip * n * its force,
+  // slip at rigid_slip * total force). Per point, the contact's compliance would change with how
+  // many points ODE's collider happens to return (4 or 6 for a wheel against a box edge, with
+  // the step: benchmarks/RESULTS.md, "step independence").
   const double cfm = contact_cfm * n;
+  const double slip = opt.rigid_slip * n;
   for (int k = 0; k < n && n_obstacle_contacts < kMaxObstacleContacts; ++k) {
     dContact& c = obstacle_contact[n_obstacle_contacts];
     c = cs[k];
     c.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
                      dContactSlip2;
-    c.surface.slip1 = c.surface.slip2 = opt.rigid_slip;
+    c.surface.slip1 = c.surface.slip2 = slip;
     c.surface.mu = mu;
     c.surface.soft_erp = contact_erp;
     c.surface.soft_cfm = cfm;
@@ -398,7 +420,9 @@ void RoverSim::Impl::step() {
   // sigma (one per wheel) and accepted when eq 12 at its end velocities gives back sigma, to
   // within SimOptions::slip_force_tolerance of the soil forces the slip sets (soil_terms_gap:
   // a slip error where the forces do not depend on it costs no solve), or when the slips agree
-  // to kSlipTolerance. The wheels share the chassis, so the residual r(sigma) = s_end - sigma
+  // to kSlipTolerance. The soil rows' levels that the explicit terms use are updated from each
+  // solve (a fixed point alongside the slip) and their change counts in the same force gap.
+  // The wheels share the chassis, so the residual r(sigma) = s_end - sigma
   // couples them: Broyden's method on the four slips from J = -I (the first update is the
   // fixed-point step, eq 12 at the end), clamped to [-1, 1]. After kMaxSlipSolves solves the
   // step is solved once more at the best slips seen.
@@ -429,7 +453,8 @@ void RoverSim::Impl::step() {
       end_velocity(i, vx, vcx);
       const double s_end = soil.slip_ratio(vx, vcx);
       res[i] = s_end - sigma[i];
-      if (std::abs(res[i]) > kSlipTolerance) worst = std::max(worst, soil_terms_gap(i, s_end));
+      soil_levels(i);  // the levels this solve reached: the next solve's (and step's) terms
+      worst = std::max(worst, soil_terms_gap(i, std::abs(res[i]) > kSlipTolerance ? s_end : sigma[i]));
     }
     if (worst <= opt.slip_force_tolerance) break;
     if (worst < best) {
