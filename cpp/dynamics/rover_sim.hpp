@@ -49,7 +49,8 @@ struct SimOptions {
   double friction = -1.0;
   /// Tangential compliance of the tyre on rigid obstacles [(m/s)/N] (assumption, ours): ODE's
   /// force-dependent slip, so that wheels with slightly different rolling radii do not fight
-  /// each other through perfectly sticking contacts. 1e-4 = 1 cm/s of creep at 100 N.
+  /// each other through perfectly sticking contacts. 1e-4 = 1 cm/s of creep at 100 N. Per
+  /// wheel–obstacle pair, shared by its collision points like the §3.4 stiffness.
   double rigid_slip = 1e-4;
   /// Tangential stiffness of each tyre on rigid ground [N/m], along its rolling direction and
   /// along its axle, and the damping of both [N s/m] (assumptions, ours): a spring–damper per
