@@ -9,4 +9,6 @@ void bind_dynamics(pybind11::module_& m);
 void bind_opt(pybind11::module_& m);
 void bind_sensing(pybind11::module_& m);
 void bind_envs(pybind11::module_& m);
+void bind_statics(pybind11::module_& m);
+void bind_statics_rover(pybind11::module_& m);  // part of bind_statics (bindings/statics_rover.cpp)
 }  // namespace ernest::bindings

@@ -18,4 +18,8 @@ PYBIND11_MODULE(_core, m) {
   auto sensing = m.def_submodule(
       "sensing", "Force–torque processing, elevation sampling, observation and reward (seed 004 §4.2–4.3)");
   ernest::bindings::bind_sensing(sensing);
+  auto statics = m.def_submodule(
+      "statics", "Statics of rovers on their contacts: ERNEST's mass model and lift-off torque "
+                 "(seed 004 §3.2, Fig. 25)");
+  ernest::bindings::bind_statics(statics);
 }

@@ -282,16 +282,21 @@ void RoverSim::Impl::build() {
     obstacle_geoms.push_back(gb);
   }
 
-  // Nominal placement so that joints are created in a consistent pose.
+  // Nominal placement so that joints are created in a consistent pose. place() tilts the chassis
+  // to the terrain under the origin, so the axes below are given as body axes in the world (on a
+  // terrain sloped at the origin, world z is not the chassis z: a yaw axis set as world z was
+  // tilted by the slope in the chassis, and the bogie's x pitched out of the chassis plane by
+  // sin(slope)(1 - cos psi)). On level ground they are exactly the world axes, as before.
   place(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+  const Mat3 rc0 = rot(kChassis);  // = the bogie's and the wheels' rotation at psi = phi = 0
   // Active Gimbal Suspension: yaw axis fixed in the chassis (z), roll axis fixed in the bogie (x),
   // collocated and intersecting (§2.2) — an ODE universal joint.
   const Vec3 gw = pos(kChassis) + rot(kChassis) * (g - p.chassis_com);
   gimbal = dJointCreateUniversal(world, nullptr);
   dJointAttach(gimbal, body[kChassis], body[kBogie]);
   dJointSetUniversalAnchor(gimbal, gw.x(), gw.y(), gw.z());
-  dJointSetUniversalAxis1(gimbal, 0.0, 0.0, 1.0);
-  dJointSetUniversalAxis2(gimbal, 1.0, 0.0, 0.0);
+  dJointSetUniversalAxis1(gimbal, rc0(0, 2), rc0(1, 2), rc0(2, 2));  // chassis z
+  dJointSetUniversalAxis2(gimbal, rc0(0, 0), rc0(1, 0), rc0(2, 0));  // bogie x
   dJointSetFeedback(gimbal, &gimbal_fb);
   // The drives are AMotors beside the joints, not the joints' own motors: a hinge or universal
   // with a bounded motor row is a "mixed" joint whose rows ODE cannot factorise up front, and the
@@ -300,21 +305,21 @@ void RoverSim::Impl::build() {
   dJointAttach(gimbal_motor, body[kChassis], body[kBogie]);
   dJointSetAMotorMode(gimbal_motor, dAMotorUser);
   dJointSetAMotorNumAxes(gimbal_motor, 2);
-  dJointSetAMotorAxis(gimbal_motor, 0, 1, 0.0, 0.0, 1.0);  // yaw: chassis z
-  dJointSetAMotorAxis(gimbal_motor, 1, 2, 1.0, 0.0, 0.0);  // roll: bogie x
+  dJointSetAMotorAxis(gimbal_motor, 0, 1, rc0(0, 2), rc0(1, 2), rc0(2, 2));  // yaw: chassis z
+  dJointSetAMotorAxis(gimbal_motor, 1, 2, rc0(0, 0), rc0(1, 0), rc0(2, 0));  // roll: bogie x
   dJointSetFeedback(gimbal_motor, &gimbal_motor_fb);
   for (int i = 0; i < 4; ++i) {
     hinge[i] = dJointCreateHinge(world, nullptr);
     dJointAttach(hinge[i], body[2 + i], body[parent_of(i)]);
     const Vec3 c = pos(2 + i);
     dJointSetHingeAnchor(hinge[i], c.x(), c.y(), c.z());
-    dJointSetHingeAxis(hinge[i], 0.0, 1.0, 0.0);
+    dJointSetHingeAxis(hinge[i], rc0(0, 1), rc0(1, 1), rc0(2, 1));  // axle: y
     dJointSetFeedback(hinge[i], &hinge_fb[i]);
     wheel_motor[i] = dJointCreateAMotor(world, nullptr);
     dJointAttach(wheel_motor[i], body[2 + i], body[parent_of(i)]);
     dJointSetAMotorMode(wheel_motor[i], dAMotorUser);
     dJointSetAMotorNumAxes(wheel_motor[i], 1);
-    dJointSetAMotorAxis(wheel_motor[i], 0, 1, 0.0, 1.0, 0.0);
+    dJointSetAMotorAxis(wheel_motor[i], 0, 1, rc0(0, 1), rc0(1, 1), rc0(2, 1));
     dJointSetFeedback(wheel_motor[i], &wheel_motor_fb[i]);
   }
 }

@@ -679,3 +679,24 @@ TEST(ActiveSet, GuessedDrivesObeyTheirLawOnRigidGround) {
   EXPECT_GT(servoed, 100);
   EXPECT_GT(sim.solver_stats().first_guess, 0.7 * 200);  // speed steps every 25 steps
 }
+
+TEST(GimbalSuspension, AxesAreBodyAxesOnATerrainSlopedAtTheOrigin) {
+  // The joints are built with the rover placed on the terrain under the origin; on a slope there
+  // the yaw axis must still be the chassis z and the roll axis the bogie x (it was world z,
+  // tilting the yaw axis by the slope: the bogie's x left the chassis plane by
+  // sin(slope)(1 - cos psi), 0.07 at 20 deg and psi = 40 deg).
+  const RoverParameters p;
+  RoverSim sim(p, HeightMap::slope(20 * kDeg, 10, 10, 0.25, -5, -5), {}, rigid_options());
+  for (double heading : {0.0, 90 * kDeg}) {
+    sim.reset(0.0, 0.0, heading, 40 * kDeg, 0.0);
+    sim.set_commands(passive());
+    sim.step_n(80);
+    const Snapshot s = sim.snapshot();
+    auto rot = [&](int b) {
+      const auto& q = s.bodies[b].quat;
+      return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).toRotationMatrix();
+    };
+    EXPECT_LT(std::abs(rot(0).col(2).dot(rot(1).col(0))), 1e-6) << heading;
+    EXPECT_NEAR(sim.state().gimbal_yaw, 40 * kDeg, 1e-3);
+  }
+}
