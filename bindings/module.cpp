@@ -18,4 +18,7 @@ PYBIND11_MODULE(_core, m) {
   auto sensing = m.def_submodule(
       "sensing", "Force–torque processing, elevation sampling, observation and reward (seed 004 §4.2–4.3)");
   ernest::bindings::bind_sensing(sensing);
+  auto walker = m.def_submodule(
+      "walker", "ATHLETE-class wheel-on-leg walker: kinematics, IK, joint torques (seed 003)");
+  ernest::bindings::bind_walker(walker);
 }

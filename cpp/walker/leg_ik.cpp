@@ -66,9 +66,13 @@ struct LegIk::Impl : Eigen::DenseFunctor<double> {
       half[i] = 0.5 * (hi - lo);
     }
     weight = options.orientation_weight;
+    // Zero-residual problem: stop as soon as |r| is 1000× below the acceptance tolerances (the
+    // iterations converge quadratically there); MINPACK's relative tests are only the fallback.
+    stop_norm = 1e-3 * std::min(options.position_tolerance,
+                                options.orientation_weight * options.orientation_tolerance);
     lm.setMaxfev(options.max_evaluations);
-    lm.setFtol(1e-14);
-    lm.setXtol(1e-14);
+    lm.setFtol(1e-12);
+    lm.setXtol(1e-12);
     lm.setGtol(0.0);
   }
 
@@ -114,6 +118,7 @@ struct LegIk::Impl : Eigen::DenseFunctor<double> {
   Eigen::VectorXd centre, half, u;
   std::vector<bool> bounded;
   double weight = 0.5;
+  double stop_norm = 1e-9;
   int leg = 0;
   Eigen::Vector3d target_p = Eigen::Vector3d::Zero();
   Eigen::Matrix3d target_r = Eigen::Matrix3d::Identity();
@@ -144,7 +149,14 @@ bool LegIk::solve_from(int leg, const Eigen::Isometry3d& target,
   m.target_r = r;
   m.evaluations = 0;
   m.to_u(seed, m.u);
-  m.lm.minimize(m.u);
+  // minimize() with one more stopping test: the residual norm (see stop_norm).
+  auto status = m.lm.minimizeInit(m.u);
+  if (status != Eigen::LevenbergMarquardtSpace::ImproperInputParameters) {
+    do {
+      if (m.lm.fnorm() <= m.stop_norm) break;
+      status = m.lm.minimizeOneStep(m.u);
+    } while (status == Eigen::LevenbergMarquardtSpace::Running);
+  }
   m.to_q(m.u, m.q);
   // Unbounded joints (a full turn of range) are wrapped into [lower, lower + 2π).
   for (int i = 0; i < q.size(); ++i) {
