@@ -11,6 +11,8 @@
 
 #include "bindings.hpp"
 #include "ernest/walker/leg_ik.hpp"
+#include "ernest/walker/stance_loads.hpp"
+#include "ernest/walker/sway_gait.hpp"
 #include "ernest/walker/walker_model.hpp"
 
 namespace py = pybind11;
@@ -247,6 +249,85 @@ void bind_walker(py::module_& m) {
       .def("last_position_error", &LegIk::last_position_error, "[m]")
       .def("last_orientation_error", &LegIk::last_orientation_error, "[rad]")
       .def("last_evaluations", &LegIk::last_evaluations);
+
+  // ---- weight distribution (Fig. 16) and the sway gait (Fig. 15) ------------------------------
+  py::class_<StanceLoads>(m, "StanceLoads",
+                          "Zero-interaction contact forces of a stance and the joint torques they "
+                          "and the links' weight cause (seed 003 §5.3.3, Fig. 16).")
+      .def_readonly("reactions", &StanceLoads::reactions, "ground on wheel, world [N], (3, legs)")
+      .def_readonly("torques", &StanceLoads::torques, "[N m], (joints, legs)")
+      .def_readonly("saturation", &StanceLoads::saturation, "|tau| / limit, (joints, legs)")
+      .def_readonly("center_of_mass", &StanceLoads::center_of_mass, "world [m]")
+      .def_readonly("peak_saturation", &StanceLoads::peak_saturation, "max |tau| / limit")
+      .def_readonly("peak_leg", &StanceLoads::peak_leg)
+      .def_readonly("peak_joint", &StanceLoads::peak_joint)
+      .def_readonly("peak_force", &StanceLoads::peak_force, "largest |reaction| [N]")
+      .def_readonly("mean_force", &StanceLoads::mean_force, "mean |reaction| of loaded legs [N]")
+      .def_readonly("loaded", &StanceLoads::loaded, "legs on the ground")
+      .def_readonly("support_margin", &StanceLoads::support_margin, "SSM of the CG [m]")
+      .def_readonly("equilibrium_residual", &StanceLoads::equilibrium_residual)
+      .def("margin", &StanceLoads::margin, "1 − peak_saturation");
+  m.def("stance_loads",
+        [](const WalkerModel& w, const Eigen::Matrix4d& body, const Eigen::MatrixXd& q,
+           const std::vector<int>& lifted) {
+          return stance_loads(w, to_isometry(body, "body"), q, lifted);
+        },
+        "model"_a, "body"_a, "q"_a, "lifted"_a = std::vector<int>{},
+        "Loads of a stance: body pose (4 × 4, world), q (joints, legs), the legs in the air.");
+  m.def("lift_legs",
+        [](const WalkerModel& w, const Eigen::Matrix4d& body, const Eigen::MatrixXd& q,
+           const std::vector<int>& legs, double height) {
+          return lift_legs(w, to_isometry(body, "body"), q, legs, height);
+        },
+        "model"_a, "body"_a, "q"_a, "legs"_a, "height"_a,
+        "q with the listed legs' wheels raised by `height` [m] (IK from the current angles).");
+
+  py::class_<SwayGaitOptions>(m, "SwayGaitOptions",
+                              "Reverse-wave gait and sway optimisation settings (seed 003 §5.3.1–5.3.2).")
+      .def(py::init<>())
+      .def_readwrite("stride", &SwayGaitOptions::stride, "advance of each foot per cycle [m]")
+      .def_readwrite("heading", &SwayGaitOptions::heading, "direction of travel [rad]")
+      .def_readwrite("lift_height", &SwayGaitOptions::lift_height, "[m]")
+      .def_readwrite("sequence", &SwayGaitOptions::sequence, "stepping order (legs)")
+      .def_readwrite("max_shift_xy", &SwayGaitOptions::max_shift_xy, "[m]")
+      .def_readwrite("max_shift_up", &SwayGaitOptions::max_shift_up, "[m]")
+      .def_readwrite("max_shift_down", &SwayGaitOptions::max_shift_down, "[m]")
+      .def_readwrite("min_support_margin", &SwayGaitOptions::min_support_margin, "SSM floor [m]")
+      .def_readwrite("fd_step", &SwayGaitOptions::fd_step, "finite-difference step [m]")
+      .def_readwrite("solver", &SwayGaitOptions::solver, "ernest_cpp.opt.SolverOptions (SLSQP)")
+      .def("validate", &SwayGaitOptions::validate, "legs"_a,
+           "Raise ValueError naming the first invalid field.");
+
+  py::class_<GaitPhase>(m, "GaitPhase", "One step of the gait: the stepping leg lifted, body still.")
+      .def_readonly("lifted_leg", &GaitPhase::lifted_leg)
+      .def_readonly("body_position", &GaitPhase::body_position, "world [m]")
+      .def_readonly("displacement", &GaitPhase::displacement, "from the reference gait [m]")
+      .def_readonly("reachable", &GaitPhase::reachable)
+      .def_readonly("peak_saturation", &GaitPhase::peak_saturation, "worst of the two instants")
+      .def_readonly("peak_force", &GaitPhase::peak_force, "[N]")
+      .def_readonly("support_margin", &GaitPhase::support_margin, "[m]")
+      .def_readonly("lift_off", &GaitPhase::lift_off, "StanceLoads at lift-off")
+      .def_readonly("touch_down", &GaitPhase::touch_down, "StanceLoads before touch-down")
+      .def_readonly("q_lift_off", &GaitPhase::q_lift_off)
+      .def_readonly("q_touch_down", &GaitPhase::q_touch_down);
+
+  py::class_<SwayGaitResult>(m, "SwayGaitResult", "Reference and sway gaits (Fig. 15).")
+      .def_readonly("reference", &SwayGaitResult::reference)
+      .def_readonly("sway", &SwayGaitResult::sway)
+      .def_readonly("reference_margin", &SwayGaitResult::reference_margin, "min over steps of 1 − peak")
+      .def_readonly("sway_margin", &SwayGaitResult::sway_margin)
+      .def_readonly("improvement", &SwayGaitResult::improvement, "sway_margin / reference_margin − 1")
+      .def_readonly("peak_reduction", &SwayGaitResult::peak_reduction,
+                    "1 − sway peak / reference peak (worst step)")
+      .def_readonly("solver_status", &SwayGaitResult::solver_status)
+      .def_readonly("evaluations", &SwayGaitResult::evaluations)
+      .def_readonly("seconds", &SwayGaitResult::seconds);
+  m.def("evaluate_gait_phase", &evaluate_gait_phase, "model"_a, "options"_a, "phase"_a,
+        "displacement"_a, py::call_guard<py::gil_scoped_release>(),
+        "Step `phase` of the periodic gait with the body displaced by `displacement` [m].");
+  m.def("optimise_sway_gait", &optimise_sway_gait, "model"_a, "options"_a = SwayGaitOptions{},
+        py::call_guard<py::gil_scoped_release>(),
+        "Reference gait and the sway gait maximising the margin to saturation at every step.");
 }
 
 }  // namespace ernest::bindings

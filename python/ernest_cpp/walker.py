@@ -1,7 +1,8 @@
 """ATHLETE-class wheel-on-leg walker (seed 003 §2.3, §5.3): the SDM-B and T12 models with their
 documented parameters, forward kinematics, multi-start inverse kinematics inside the joint limits,
 contact Jacobians, static joint torques ``tau = J^T f + g(q)`` and margins to saturation
-(Figs 15–16), and per-link collision capsules. The work is done in C++ (``ernest_cpp._core.walker``);
+(Figs 15–16), per-link collision capsules, the weight distribution with legs lifted (Fig. 16)
+and the sway gait (Figs 14–15). The work is done in C++ (``ernest_cpp._core.walker``);
 this module re-exports it.
 
 Poses are 4 × 4 homogeneous matrices (body frame for the legs, world for the body); a whole-robot
@@ -12,30 +13,46 @@ from __future__ import annotations
 
 from ._core.walker import (  # noqa: F401  (re-exports)
     Capsule,
+    GaitPhase,
     IkOptions,
     IkResult,
     IkStatus,
     JointSpec,
     LegIk,
     LinkCapsule,
+    StanceLoads,
+    SwayGaitOptions,
+    SwayGaitResult,
     WalkerModel,
     WalkerParameters,
+    evaluate_gait_phase,
+    lift_legs,
+    optimise_sway_gait,
     sdm_b_parameters,
+    stance_loads,
     t12_parameters,
     upright_foot_pose,
 )
 
 __all__ = [
     "Capsule",
+    "GaitPhase",
     "IkOptions",
     "IkResult",
     "IkStatus",
     "JointSpec",
     "LegIk",
     "LinkCapsule",
+    "StanceLoads",
+    "SwayGaitOptions",
+    "SwayGaitResult",
     "WalkerModel",
     "WalkerParameters",
+    "evaluate_gait_phase",
+    "lift_legs",
+    "optimise_sway_gait",
     "sdm_b_parameters",
+    "stance_loads",
     "t12_parameters",
     "upright_foot_pose",
 ]

@@ -130,3 +130,27 @@ def test_bad_input_raises_value_error_naming_the_field(sdm_b):
     o.seeds = 0
     with pytest.raises(ValueError, match="IkOptions.seeds"):
         W.LegIk(sdm_b, o)
+
+
+def test_fig16_and_sway_gait_from_python(sdm_b, tmp_path):
+    from ernest_cpp import walker_demo
+
+    body = sdm_b.standard_body_pose()
+    weight = sdm_b.params.total_mass() * sdm_b.params.gravity
+    q1 = W.lift_legs(sdm_b, body, sdm_b.standard_configuration, [0], 0.2)
+    one = W.stance_loads(sdm_b, body, q1, [0])
+    np.testing.assert_allclose(one.reactions.sum(axis=1), [0, 0, weight], atol=1e-6)
+    assert one.reactions[:, 0].tolist() == [0.0, 0.0, 0.0]
+    with pytest.raises(ValueError, match="lifted leg 7"):
+        W.stance_loads(sdm_b, body, q1, [7])
+    with pytest.raises(ValueError, match="SwayGaitOptions.stride"):
+        o = W.SwayGaitOptions()
+        o.stride = -1.0
+        W.optimise_sway_gait(sdm_b, o)
+    report = walker_demo.run(tmp_path)
+    two, gait = report["two"], report["gait"]
+    assert two.peak_saturation < one.peak_saturation and two.mean_force > one.mean_force
+    assert gait.peak_reduction > 0.2
+    assert all(s.peak_saturation <= r.peak_saturation + 1e-12 for r, s in zip(gait.reference, gait.sway))
+    for name in ("fig16_lifted_legs.png", "fig15_sway_gait.png", "walker_report.md"):
+        assert (tmp_path / name).stat().st_size > 1000
