@@ -11,6 +11,7 @@
 
 #include "bindings.hpp"
 #include "ernest/walker/leg_ik.hpp"
+#include "ernest/walker/self_collision.hpp"
 #include "ernest/walker/stance_loads.hpp"
 #include "ernest/walker/sway_gait.hpp"
 #include "ernest/walker/walker_model.hpp"
@@ -186,6 +187,23 @@ void bind_walker(py::module_& m) {
            "body"_a, "q"_a, "Collision capsules of every leg in the world.")
       .def("within_limits", &WalkerModel::within_limits, "q"_a, "tolerance"_a = 1e-9,
            "True when every joint is inside its limits.");
+
+  py::class_<CollisionPair>(m, "CollisionPair",
+                            "Two shapes within the clearance (link -1 = wheel; leg_b -1 = chassis).")
+      .def_readonly("leg_a", &CollisionPair::leg_a)
+      .def_readonly("link_a", &CollisionPair::link_a)
+      .def_readonly("leg_b", &CollisionPair::leg_b)
+      .def_readonly("link_b", &CollisionPair::link_b)
+      .def_readonly("distance", &CollisionPair::distance, "[m], 0 when intersecting")
+      .def("__repr__", [](const CollisionPair& c) {
+        return "CollisionPair(" + std::to_string(c.leg_a) + ":" + std::to_string(c.link_a) + ", " +
+               std::to_string(c.leg_b) + ":" + std::to_string(c.link_b) +
+               ", distance=" + std::to_string(c.distance) + ")";
+      });
+  m.attr("CHASSIS") = kChassis;
+  m.def("self_collisions", &self_collisions, "model"_a, "q"_a, "clearance"_a = 0.0,
+        "Pairs of link capsules (other legs, chassis, distant links of the same leg) within "
+        "`clearance` [m] in configuration q (joints, legs), checked with FCL.");
 
   m.def("upright_foot_pose",
         [](const WalkerModel& w, const Eigen::Vector3d& contact, double heading, const Eigen::Vector3d& up) {

@@ -154,3 +154,13 @@ def test_fig16_and_sway_gait_from_python(sdm_b, tmp_path):
     assert all(s.peak_saturation <= r.peak_saturation + 1e-12 for r, s in zip(gait.reference, gait.sway))
     for name in ("fig16_lifted_legs.png", "fig15_sway_gait.png", "walker_report.md"):
         assert (tmp_path / name).stat().st_size > 1000
+
+
+def test_self_collisions(sdm_b):
+    assert W.self_collisions(sdm_b, sdm_b.standard_configuration) == []
+    q = sdm_b.standard_configuration.copy()
+    q[0, 0], q[0, 1] = math.radians(50), math.radians(-50)
+    pairs = W.self_collisions(sdm_b, q)
+    assert pairs and all(p.leg_a == 0 and p.leg_b == 1 and p.distance == 0.0 for p in pairs)
+    with pytest.raises(ValueError, match="clearance"):
+        W.self_collisions(sdm_b, q, -0.1)
