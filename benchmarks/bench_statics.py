@@ -51,6 +51,10 @@ def stances(n, seed=7):
 
 
 # ---- numpy/scipy reference of the margins ----
+def cross2(a, b):
+    return a[0] * b[1] - a[1] * b[0]
+
+
 def hull(points2, idx):
     h = scipy.spatial.ConvexHull(points2[idx])  # counter-clockwise in 2-D
     return [idx[v] for v in h.vertices]
@@ -62,7 +66,7 @@ def clip(poly, a, b, lab):
     out = []
     for k, (p, plab) in enumerate(poly):
         q = poly[(k + 1) % len(poly)][0]
-        dp, dq = np.cross(d, p - a), np.cross(d, q - a)
+        dp, dq = cross2(d, p - a), cross2(d, q - a)
         if dp >= 0:
             out.append((p, plab))
         if (dp >= 0) != (dq >= 0):
@@ -77,7 +81,7 @@ def signed_distance_and_nesm(poly, feet, cg):
     for k, (p, (i, j)) in enumerate(poly):
         q = poly[(k + 1) % n][0]
         e = q - p
-        s = np.cross(e, c2 - p) / np.linalg.norm(e)
+        s = cross2(e, c2 - p) / np.linalg.norm(e)
         inside &= s >= 0
         ssm_in = min(ssm_in, s)
         t = np.clip(np.dot(c2 - p, e) / np.dot(e, e), 0, 1)
