@@ -9,5 +9,6 @@ void bind_dynamics(pybind11::module_& m);
 void bind_opt(pybind11::module_& m);
 void bind_sensing(pybind11::module_& m);
 void bind_envs(pybind11::module_& m);
+void bind_statics(pybind11::module_& m);
 void bind_walker(pybind11::module_& m);
 }  // namespace ernest::bindings

@@ -4,7 +4,7 @@
 #include "bindings.hpp"
 
 PYBIND11_MODULE(_core, m) {
-  m.doc() = "C++ core of ernest-cpp (soil, dynamics, optimisation). Use the ernest_cpp package.";
+  m.doc() = "C++ core of ernest-cpp (soil, dynamics, optimisation, statics). Use the ernest_cpp package.";
   auto soil = m.def_submodule("soil", "Bekker–Wong soft soil and rigid contact (seed 004 §3.3–3.4)");
   ernest::bindings::bind_soil(soil);
   auto dynamics = m.def_submodule(
@@ -18,6 +18,9 @@ PYBIND11_MODULE(_core, m) {
   auto sensing = m.def_submodule(
       "sensing", "Force–torque processing, elevation sampling, observation and reward (seed 004 §4.2–4.3)");
   ernest::bindings::bind_sensing(sensing);
+  auto statics = m.def_submodule(
+      "statics", "Stability margins, force distribution, sag model and its calibration (seed 003 §3.3, §5.1)");
+  ernest::bindings::bind_statics(statics);
   auto walker = m.def_submodule(
       "walker", "ATHLETE-class wheel-on-leg walker: kinematics, IK, joint torques (seed 003)");
   ernest::bindings::bind_walker(walker);
