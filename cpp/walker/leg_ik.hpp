@@ -29,7 +29,9 @@ enum class IkStatus { kSolved, kUnreachable };
 
 struct IkResult {
   IkStatus status = IkStatus::kUnreachable;
-  /// Distinct solutions inside the joint limits, nearest to the caller's seed first.
+  /// Distinct solutions inside the joint limits, nearest to the caller's seed first. A 6-joint
+  /// leg has finitely many (SDM-B: up to 8 branches, yaw × knee × wrist); for a redundant leg
+  /// (T12's seven joints) they are samples of a continuum, one per converged start.
   std::vector<Eigen::VectorXd> solutions;
   /// Errors of the best start (the first solution when solved; the closest approach otherwise).
   double position_error = 0.0;     ///< [m]
