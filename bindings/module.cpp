@@ -4,7 +4,7 @@
 #include "bindings.hpp"
 
 PYBIND11_MODULE(_core, m) {
-  m.doc() = "C++ core of ernest-cpp (soil, dynamics, optimisation). Use the ernest_cpp package.";
+  m.doc() = "C++ core of ernest-cpp (soil, dynamics, optimisation, statics). Use the ernest_cpp package.";
   auto soil = m.def_submodule("soil", "Bekker–Wong soft soil and rigid contact (seed 004 §3.3–3.4)");
   ernest::bindings::bind_soil(soil);
   auto dynamics = m.def_submodule(
@@ -19,7 +19,11 @@ PYBIND11_MODULE(_core, m) {
       "sensing", "Force–torque processing, elevation sampling, observation and reward (seed 004 §4.2–4.3)");
   ernest::bindings::bind_sensing(sensing);
   auto statics = m.def_submodule(
-      "statics", "Statics of rovers on their contacts: ERNEST's mass model and lift-off torque "
-                 "(seed 004 §3.2, Fig. 25)");
+      "statics", "Statics on any set of contacts: stability margins, force distribution, sag model "
+                 "and its calibration (seed 003 §3.3, §5.1); ERNEST's mass model and lift-off "
+                 "torque (seed 004 §3.2, Fig. 25)");
   ernest::bindings::bind_statics(statics);
+  auto walker = m.def_submodule(
+      "walker", "ATHLETE-class wheel-on-leg walker: kinematics, IK, joint torques (seed 003)");
+  ernest::bindings::bind_walker(walker);
 }

@@ -3,7 +3,7 @@
 Subpackages mirror the C++ tree: ``ernest_cpp.soil`` wraps ``cpp/soil``.
 """
 
-from . import dynamics, opt, rl, sensing, soil, statics
+from . import dynamics, opt, rl, sensing, soil, statics, walker
 
-__all__ = ["dynamics", "opt", "rl", "sensing", "soil", "statics"]
+__all__ = ["dynamics", "opt", "rl", "sensing", "soil", "statics", "walker"]
 __version__ = "0.1.0"
