@@ -169,6 +169,9 @@ void bind_dynamics(py::module_& m) {
       .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,
                      "implicit slip [N]: accepted change of the soil forces between the slip "
                      "used and eq 12's at the step's end; 1e9 = explicit (chatters)")
+      .def_readwrite("obstacle_substeps", &SimOptions::obstacle_substeps,
+                     "a step in which a wheel touches an obstacle is taken as this many substeps "
+                     "of dt / n (the §3.4 contact is under-resolved at the default step); 1 = none")
       .def("validate", &SimOptions::validate, "Raise ValueError naming an invalid field.");
 
   py::class_<Commands>(m, "Commands",

@@ -134,6 +134,8 @@ void bind_envs(py::module_& m) {
       .def_readwrite("physics_dt", &EnvOptions::physics_dt, "[s], 0 = simulator default")
       .def_readwrite("slip_force_tolerance", &EnvOptions::slip_force_tolerance,
                      "implicit slip tolerance (SimOptions.slip_force_tolerance), 0 = simulator default")
+      .def_readwrite("obstacle_substeps", &EnvOptions::obstacle_substeps,
+                     "substeps while touching an obstacle (SimOptions.obstacle_substeps), 0 = simulator default")
       .def_readwrite("policy_dt", &EnvOptions::policy_dt, "[s]")
       .def_readwrite("episode_duration", &EnvOptions::episode_duration, "[s], 0 = scenario's")
       .def_readwrite("sync_rate", &EnvOptions::sync_rate, "[Hz]")

@@ -70,8 +70,8 @@ void RoverSim::Impl::emit_rigid(int i, const std::int8_t* modes) {
   ct.surface.soft_cfm = contact_cfm;
   ct.surface.slip1 = tangential_cfm[0];
   ct.surface.slip2 = tangential_cfm[1];
-  ct.surface.motion1 = -tangential_erp[0] / opt.dt * rigid_deflection[i].dot(g.fx);
-  ct.surface.motion2 = -tangential_erp[1] / opt.dt * rigid_deflection[i].dot(g.fy);
+  ct.surface.motion1 = -tangential_erp[0] / h * rigid_deflection[i].dot(g.fx);
+  ct.surface.motion2 = -tangential_erp[1] / h * rigid_deflection[i].dot(g.fy);
   dJointID j = dJointCreateContact(world, contacts, &ct);
   dJointAttach(j, body[2 + i], nullptr);
   dJointSetFeedback(j, &ground_fb[i]);
@@ -85,7 +85,6 @@ bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& v
                                   std::int8_t* next) {
   const GroundContact& g = ground[i];
   const int r = kRowsPerWheel * i;
-  const double h = opt.dt;
   if (modes && modes[r + kNormal] == kAtLo) {
     const double push = contact_erp * g.depth / h - vp.dot(g.n);
     next[r + kNormal] = push > 0.0 ? kFree : kAtLo;

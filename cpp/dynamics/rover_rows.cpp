@@ -71,9 +71,10 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
   // Soft soil: the explicit share of the axle torque (soil_terms), then the rows.
   tw += g.axle * g.axle_torque;
   // (c) Normal force F_n = max(0, F_z - c v_n): a damper around the soil's pressure force that
-  //     never pulls; lambda = (motion - v_n) / cfm with motion = F_z / c, cfm = 1 / c. Guessed
-  //     at 0 (the wheel leaves the soil faster than F_z / c): no row, no force.
-  const double c = opt.soil_normal_damping;
+  //     never pulls; lambda = (motion - v_n) / cfm with motion = F_z / c, cfm = 1 / c. c is the
+  //     soil's damper plus h dF_z/dz (eq 32's spring at the end of the step, linearised: see
+  //     prepare_ground). Guessed at 0 (the wheel leaves the soil faster than F_z / c): no row.
+  const double c = opt.soil_normal_damping + h * g.ks;
   const std::int8_t normal_mode = mode_of(kRowsPerWheel * i + kNormal);
   Slot slots[2];  // x then y: with fdir1 = x the second friction row is n × x = y
   int ns = 0;
@@ -207,7 +208,7 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
         row_force[row] = to_vec(ground_fb[i].f1).dot(g.n);
         next[row] = row_force[row] > 0.0 ? kFree : kAtLo;
       } else {
-        const double total = g.fz - opt.soil_normal_damping * vp.dot(g.n);
+        const double total = g.fz - (opt.soil_normal_damping + h * g.ks) * vp.dot(g.n);
         row_force[row] = 0.0;
         outcome(row, total > 0.0 ? kFree : kAtLo);
       }

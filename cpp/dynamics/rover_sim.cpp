@@ -166,6 +166,7 @@ void SimOptions::validate() const {
   require_in_range(o, "max_speed", max_speed, 1e-3, 1e6);
   require_in_range(o, "max_angular_speed", max_angular_speed, 1e-3, 1e7);
   require_in_range(o, "slip_force_tolerance", slip_force_tolerance, 1e-6, 1e9);
+  require_in_range(o, "obstacle_substeps", obstacle_substeps, 1, 64);
 }
 
 void Commands::validate() const {
@@ -223,15 +224,8 @@ void RoverSim::Impl::build() {
 
   std::mt19937_64 rng(opt.seed);
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
-  contact_erp = opt.rigid.erp(opt.dt);
-  contact_cfm = opt.rigid.cfm(opt.dt);
   lcp.exact_friction = opt.ground == GroundType::Rigid;  // Coulomb's cap for sliding tyres
-  for (int k = 0; k < 2; ++k) {  // the tyre's tangential spring–dampers as soft rows
-    const double stiffness = k == 0 ? opt.rigid_tyre_stiffness_x : opt.rigid_tyre_stiffness_y;
-    const double kh = stiffness * opt.dt + opt.rigid_tyre_damping;
-    tangential_cfm[k] = 1.0 / kh;
-    tangential_erp[k] = stiffness * opt.dt / kh;
-  }
+  set_step_length(opt.dt);
 
   // Bodies in the nominal pose (rover frame = world, psi = phi = 0); reset() moves them.
   dMass m;

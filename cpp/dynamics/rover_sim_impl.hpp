@@ -93,6 +93,8 @@ struct GroundContact {
   // soft soil: bounds of the implicit rows and the explicit normal force (eqs 28–32), and the
   // explicit share of the soil's axle torque (about `axle`), all at the slip of the attempt
   double ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0, axle_torque = 0.0;
+  double fz_pressure = 0.0;  // eq 32's pressure part at the slip of the attempt [N]
+  double ks = 0.0;  // d F_z / d sinkage at the start of the step [N/m] (eq 32, pressure part)
   soil::ContactState cs{};  // eq 12–32 inputs at the start of the step (Fig. 7 frame)
 };
 
@@ -114,7 +116,8 @@ struct RoverSim::Impl {
   SimOptions opt;
   soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
   double mu = 0.5;
-  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at opt.dt
+  double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
+  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at h
   // The tyre's along x and y on rigid ground (rover_rigid.cpp).
   std::array<double, 2> tangential_erp{}, tangential_cfm{};
 
@@ -191,12 +194,16 @@ struct RoverSim::Impl {
   void place(double x, double y, double heading, double psi, double phi, double speed);
   // rover_step.cpp
   void step();
+  void step_once();
+  void set_step_length(double length);
+  bool touching_obstacles();
   void gimbal_angles(double& psi, double& phi, double& psid, double& phid, Vec3& ez,
                      Vec3& ea) const;
   void prepare_actuators(double psi, double phi);
   void prepare_ground();
   struct SoilTerms {
     double slip = 0.0, ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0, axle_torque = 0.0;
+    double fz_pressure = 0.0;  // eq 32 without the shear part, not floored
   };
   SoilTerms soil_terms_at(int wheel, double slip) const;
   void soil_terms(int wheel, double slip);

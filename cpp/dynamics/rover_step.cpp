@@ -46,7 +46,7 @@ void RoverSim::Impl::gimbal_angles(double& psi, double& phi, double& psid, doubl
 // and the joint stops. A drive row acts on (w_1 - w_2) . axis with body 1 the wheel (wheels) or
 // the chassis (gimbal), hence the gimbal targets' minus sign.
 void RoverSim::Impl::prepare_actuators(double psi, double phi) {
-  const double dt = opt.dt;
+  const double dt = h;
   const double wheel_max = p.wheel_motor.max_output_torque();
   explicit_motor_torque.fill(0.0);
   for (int i = 0; i < 4; ++i) {
@@ -167,6 +167,14 @@ void RoverSim::Impl::prepare_ground() {
                               st.contact_vy[i]};
     // First guess of the step's slip: eq 12 at the start of the step (see step()).
     soil_terms(i, soil.slip_ratio(g.cs.vx, g.cs.vcx));
+    // The pressure-sinkage spring of eq 32 linearised in the sinkage, for the normal row
+    // (rover_rows.cpp): F_z(z - h v_n) ~ F_z - h (dF_z/dz) v_n, a backward-Euler damper added to
+    // the soil's. Taken at the start of the step instead, the spring against the damper (time
+    // constant ~50 ms) lagged a step: benchmarks/RESULTS.md, "step independence".
+    soil::ContactState deeper = g.cs;
+    const double dz = std::max(1e-5, 0.01 * dp.depth);
+    deeper.sinkage += dz;
+    g.ks = std::max(0.0, (soil.split(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
   }
 }
 
@@ -198,6 +206,7 @@ RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) cons
   t.comp = std::max(-s.fx_pressure * sign_vx, 0.0);  // rb int sigma sin theta (eq 30)
   if (t.comp < kMinRowBound) t.comp = 0.0;
   const double sx = shear_x[i];
+  t.fz_pressure = s.fz_pressure;
   t.fz = std::max(0.0, s.fz_pressure) + s.fz_shear * sx;
   const double arm = g.arm.cross(g.fx).dot(g.axle);  // axle torque per unit x force at the patch
   const double row_torque = arm * t.ax * sx;
@@ -216,6 +225,7 @@ void RoverSim::Impl::soil_terms(int i, double slip) {
   g.ay = t.ay;
   g.comp = t.comp;
   g.fz = t.fz;
+  g.fz_pressure = t.fz_pressure;
   g.axle_torque = t.axle_torque;
 }
 
@@ -339,7 +349,7 @@ bool RoverSim::Impl::solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess
     if (attempts++ > 0) restore_bodies();
     tried = guess;
     emit(guess.data());
-    dWorldStep(world, opt.dt);
+    dWorldStep(world, h);
     held = settle(guess.data(), next.data());
     dJointGroupEmpty(contacts);
     if (held) {
@@ -368,14 +378,53 @@ bool RoverSim::Impl::solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess
   if (!held) {  // guessing off (or, never seen, no progress): every row with its bounds
     if (attempts++ > 0) restore_bodies();
     emit(nullptr);
-    dWorldStep(world, opt.dt);
+    dWorldStep(world, h);
     settle(nullptr, next.data());
     dJointGroupEmpty(contacts);
   }
   return held;
 }
 
+// The §3.4 spring–dampers (obstacles, rigid ground, the tyre's tangential springs) as ODE's
+// ERP / CFM for a step of the given length.
+void RoverSim::Impl::set_step_length(double length) {
+  h = length;
+  contact_erp = opt.rigid.erp(h);
+  contact_cfm = opt.rigid.cfm(h);
+  for (int k = 0; k < 2; ++k) {  // the tyre's tangential spring–dampers as soft rows
+    const double stiffness = k == 0 ? opt.rigid_tyre_stiffness_x : opt.rigid_tyre_stiffness_y;
+    const double kh = stiffness * h + opt.rigid_tyre_damping;
+    tangential_cfm[k] = 1.0 / kh;
+    tangential_erp[k] = stiffness * h / kh;
+  }
+}
+
+bool RoverSim::Impl::touching_obstacles() {
+  if (obstacle_geoms.empty()) return false;
+  prepare_obstacles();
+  return n_obstacle_contacts > 0;
+}
+
+// One step of opt.dt; where a wheel touches an obstacle, opt.obstacle_substeps steps of
+// opt.dt / n (SimOptions::obstacle_substeps: the contact is under-resolved at the default step).
+// A force added with add_force() acts over the whole step.
 void RoverSim::Impl::step() {
+  init_ode_once();
+  const int n = opt.obstacle_substeps > 1 && !diverged && touching_obstacles() ? opt.obstacle_substeps : 1;
+  if (n == 1) {
+    if (h != opt.dt) set_step_length(opt.dt);
+    step_once();
+    return;
+  }
+  set_step_length(opt.dt / n);
+  const Vec3 force = pending_force;
+  for (int k = 0; k < n; ++k) {
+    pending_force = force;
+    step_once();
+  }
+}
+
+void RoverSim::Impl::step_once() {
   if (diverged)
     throw SimulationDiverged("RoverSim: the simulation diverged earlier; restore() or reset() first");
   init_ode_once();
@@ -491,7 +540,7 @@ void RoverSim::Impl::step() {
     else if (held && !some_bounded) ++stats.later_guess;
     else ++stats.pivoted;
   }
-  read_outputs(opt.dt);
+  read_outputs(h);
   check_divergence();
 }
 

@@ -15,6 +15,7 @@ void EnvOptions::validate() const {
   soil::SoilParameters::preset(soil);  // throws naming the allowed presets
   require_in_range(o, "physics_dt", physics_dt, 0.0, 0.05);
   require_in_range(o, "slip_force_tolerance", slip_force_tolerance, 0.0, 1e9);
+  require_in_range(o, "obstacle_substeps", obstacle_substeps, 0, 64);
   require_in_range(o, "policy_dt", policy_dt, 0.01, 5.0);
   require_in_range(o, "episode_duration", episode_duration, 0.0, 3600.0);
   require_in_range(o, "sync_rate", sync_rate, 1.0, 1e4);
@@ -47,6 +48,7 @@ RoverEnv::RoverEnv(const dynamics::RoverParameters& params, const EnvOptions& op
   if (options_.eps_motion > 0.0) sim_options_.soil.eps_motion = options_.eps_motion;
   if (options_.physics_dt > 0.0) sim_options_.dt = options_.physics_dt;
   if (options_.slip_force_tolerance > 0.0) sim_options_.slip_force_tolerance = options_.slip_force_tolerance;
+  if (options_.obstacle_substeps > 0) sim_options_.obstacle_substeps = options_.obstacle_substeps;
   sim_options_.validate();
   const double dt = sim_options_.dt;
   substeps_ = static_cast<int>(std::lround(options_.policy_dt / dt));

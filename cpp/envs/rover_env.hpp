@@ -40,6 +40,7 @@ struct EnvOptions {
   bool passive = false;             ///< passive bogie: gimbal off, clutch open (§5, Table 6)
   double physics_dt = 0.0;          ///< [s]; 0 = the simulator's default step
   double slip_force_tolerance = 0.0;      ///< SimOptions::slip_force_tolerance; 0 = the simulator's default
+  int obstacle_substeps = 0;        ///< SimOptions::obstacle_substeps; 0 = the simulator's default
   double policy_dt = 0.5;           ///< [s], 2 Hz (Table 5)
   double episode_duration = 0.0;    ///< [s]; 0 = the scenario's (30 s step, 60 s otherwise)
   double sync_rate = 50.0;          ///< wheel synchroniser rate [Hz] (at most the physics rate)

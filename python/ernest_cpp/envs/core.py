@@ -20,7 +20,7 @@ SCENARIO_ALIASES = {
 
 
 def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool = False,
-                 physics_dt: float = 0.0, slip_force_tolerance: float = 0.0, episode_length: float = 0.0, rigid_ground: bool = False,
+                 physics_dt: float = 0.0, slip_force_tolerance: float = 0.0, obstacle_substeps: int = 0, episode_length: float = 0.0, rigid_ground: bool = False,
                  eps_slip: float = 1e4, eps_motion: float = 0.01, fts_noise_force: float = 0.0, fts_noise_torque: float = 0.0,
                  start_speed: float = 0.0, randomisation: dict | None = None) -> _envs.EnvOptions:
     """EnvOptions from keyword arguments (the Gymnasium kwargs), validated.
@@ -45,6 +45,7 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
     o.passive = bool(passive)
     o.physics_dt = float(physics_dt)
     o.slip_force_tolerance = float(slip_force_tolerance)
+    o.obstacle_substeps = int(obstacle_substeps)
     o.episode_duration = float(episode_length)
     o.rigid_ground = bool(rigid_ground)
     o.eps_slip = float(eps_slip)
