@@ -319,3 +319,22 @@ TEST(SagCalibration, InvalidInputNamesTheField) {
   EXPECT_NE(invalid_argument_message([&] { calibrate_spring_constant({}); }).find("stances"),
             std::string::npos);
 }
+
+TEST(SagCalibration, RecoversPerFootConstants) {
+  // §5.1.4: tyre pressures within ±12.5 %; the per-foot fit recovers each constant from the
+  // same protocol (noise-free), starting from the single best constant.
+  const Eigen::VectorXd truth = (Eigen::VectorXd(6) << 1.0, 1.1, 0.9, 1.125, 0.875, 1.05).finished() * 8e4;
+  std::vector<CalibrationStance> st = synthetic_stances(1.0, 0.0, 1);
+  for (CalibrationStance& s : st) {  // re-measure with the per-foot constants
+    SagProblem p = s.problem;
+    for (int i = 0; i < 6; ++i) p.stiffness.col(i) *= truth(i);
+    s.measured_heights = solve_sag(p).body_points.row(2).transpose();
+  }
+  const CalibrationResult single = calibrate_spring_constant(st);
+  EXPECT_GT(single.mean_error, 1e-5);  // one constant cannot explain unequal tyres
+  const PerFootCalibrationResult r = calibrate_per_foot_constants(st, single.k);
+  EXPECT_GE(r.lm_status, 1);
+  EXPECT_LE(r.lm_status, 4);
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(r.k(i), truth(i), 1e-4 * truth(i)) << i;
+  EXPECT_LT(r.mean_error, 1e-9);
+}
