@@ -24,7 +24,7 @@ namespace ernest::statics {
 
 /// One stance of the sag model. Vectors are in a fixed world frame [m], forces [N].
 struct SagProblem {
-  Eigen::Matrix3Xd feet;       ///< r_0,i: unsagged foot (fork) positions, eq 1; N >= 3 columns
+  Eigen::Matrix3Xd feet;       ///< r_0,i: unsagged foot (fork) positions, eq 1 (N < 3: Unstable)
   Eigen::Matrix3Xd stiffness;  ///< k_xx, k_yy, k_zz of each foot [N/m] (> 0), eq 3
   /// Δh_i, eq 9: how far foot i is above the point where it starts bearing load, along the
   /// spring frame's z axis (> 0 lifted, < 0 pre-compressed). Empty = all zeros. +inf marks a
