@@ -60,8 +60,10 @@ struct SagOptions {
 
 enum class SagStatus {
   Converged,     ///< equilibrium found and at least three feet loaded
-  Unstable,      ///< no static equilibrium: fewer than three feet can be loaded, or the CG
-                 ///< projects outside their support polygon (the robot tips over)
+  Unstable,      ///< no static equilibrium: fewer than three feet can be loaded, the CG
+                 ///< projects outside their support polygon, or a foot that must unload
+                 ///< leaves feet that cannot hold the robot (it tips on its compliant contacts,
+                 ///< e.g. a high CG near an edge)
   NotConverged,  ///< LM stopped without reaching equilibrium although the stance looks stable
 };
 
