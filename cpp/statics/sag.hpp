@@ -12,7 +12,10 @@
 // (equilibrium), 6–7 (distances between successive and alternate feet) and 8 (CG to each foot),
 // over-constrained as the paper describes, solved by Eigen's LevenbergMarquardt with the set of
 // loaded feet held fixed (smooth residuals), inside an active-set loop that moves feet in or out
-// of contact until eqs 10–12's "if in contact" holds for every foot. The chassis
+// of contact until eqs 10–12's "if in contact" holds for every foot. If that loop fails (a foot
+// that must unload leaves feet that cannot hold the robot, which then leans onto a lifted foot),
+// it is retried along the quasi-static path of lifting: the lifts grow from zero in steps, each
+// solved from the last. The chassis
 // rotation is then backtracked (the paper's last step) as the rigid transform that best maps the
 // unsagged feet and CG onto the sagged ones (Eigen::umeyama). The vertical rigidity of the feet
 // comes from eq 8, so the CG must not lie in the plane of the feet.
