@@ -301,6 +301,18 @@ void bind_calibration(py::module_& m) {
       .def_readonly("grid_k", &CalibrationResult::grid_k)
       .def_readonly("grid_error", &CalibrationResult::grid_error)
       .def_readonly("sag_solves", &CalibrationResult::sag_solves);
+  py::class_<PerFootCalibrationResult>(m, "PerFootCalibrationResult",
+                                       "One spring constant per foot and the height errors.")
+      .def_readonly("k", &PerFootCalibrationResult::k, "(N,) [N/m]")
+      .def_readonly("mean_error", &PerFootCalibrationResult::mean_error)
+      .def_readonly("max_error", &PerFootCalibrationResult::max_error)
+      .def_readonly("sag_solves", &PerFootCalibrationResult::sag_solves)
+      .def_readonly("lm_status", &PerFootCalibrationResult::lm_status,
+                    "Eigen LevenbergMarquardt status (1–4: converged)");
+  m.def("calibrate_per_foot_constants", &calibrate_per_foot_constants, "stances"_a,
+        "k_initial"_a, "options"_a = SagOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "One constant per foot (§5.1.4, unequal tyres) by Levenberg–Marquardt on the height "
+        "errors over log k, from k_initial.");
   m.def(
       "mean_height_error",
       [](const std::vector<CalibrationStance>& stances, double k, const SagOptions& options) {

@@ -8,6 +8,9 @@
 #include <stdexcept>
 #include <string>
 
+#include <unsupported/Eigen/NonLinearOptimization>
+#include <unsupported/Eigen/NumericalDiff>
+
 #include "ernest/common/validation.hpp"
 
 namespace ernest::statics {
@@ -56,6 +59,41 @@ double error_unchecked(const std::vector<CalibrationStance>& stances, double k,
   if (max_error) *max_error = worst;
   return sum / count;
 }
+
+// Height residuals (predicted - measured) for per-foot constants exp(x_i), for Eigen's LM. A
+// stance whose sag solve does not converge gets 1 m residuals: finite, and far worse than any fit.
+struct PerFootFunctor {
+  using Scalar = double;
+  enum { InputsAtCompileTime = Eigen::Dynamic, ValuesAtCompileTime = Eigen::Dynamic };
+  using InputType = Eigen::VectorXd;
+  using ValueType = Eigen::VectorXd;
+  using JacobianType = Eigen::MatrixXd;
+  const std::vector<CalibrationStance>* stances = nullptr;
+  const SagOptions* options = nullptr;
+  int feet = 0, measurements = 0;
+  mutable int solves = 0;
+
+  int inputs() const { return feet; }
+  int values() const { return measurements; }
+  int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
+    int row = 0;
+    for (const CalibrationStance& st : *stances) {
+      SagProblem p = st.problem;
+      for (int i = 0; i < feet; ++i) p.stiffness.col(i) *= std::exp(x(i));
+      const Eigen::Index m = st.measured_heights.size();
+      ++solves;
+      const SagResult res = solve_sag(p, *options);  // inputs validated before: no throw
+      if (res.status != SagStatus::Converged) {
+        r.segment(row, m).setOnes();
+      } else {
+        const Eigen::Vector3d up = -p.gravity.normalized();
+        r.segment(row, m) = (up.transpose() * res.body_points).transpose() - st.measured_heights;
+      }
+      row += static_cast<int>(m);
+    }
+    return 0;
+  }
+};
 
 }  // namespace
 
@@ -111,6 +149,45 @@ CalibrationResult calibrate_spring_constant(const std::vector<CalibrationStance>
   }
   error_unchecked(stances, res.k, options.sag, &res.max_error);
   res.sag_solves += static_cast<int>(stances.size());
+  return res;
+}
+
+PerFootCalibrationResult calibrate_per_foot_constants(
+    const std::vector<CalibrationStance>& stances, double k_initial, const SagOptions& options) {
+  check_stances(stances);
+  require_positive("calibrate_per_foot_constants", "k_initial", k_initial);
+  options.validate();
+  const int n = static_cast<int>(stances.front().problem.feet.cols());
+  int measurements = 0;
+  for (std::size_t s = 0; s < stances.size(); ++s) {
+    if (stances[s].problem.feet.cols() != n) {
+      throw std::invalid_argument("stances[" + std::to_string(s) + "].problem.feet has " +
+                                  std::to_string(stances[s].problem.feet.cols()) +
+                                  " feet; every stance needs " + std::to_string(n));
+    }
+    measurements += static_cast<int>(stances[s].measured_heights.size());
+  }
+  require(measurements >= n, "per-foot calibration needs at least as many measured heights (" +
+                                 std::to_string(measurements) + ") as feet (" +
+                                 std::to_string(n) + ")");
+  PerFootFunctor fn;
+  fn.stances = &stances;
+  fn.options = &options;
+  fn.feet = n;
+  fn.measurements = measurements;
+  Eigen::NumericalDiff<PerFootFunctor> diff(fn);
+  Eigen::LevenbergMarquardt<Eigen::NumericalDiff<PerFootFunctor>> lm(diff);
+  lm.parameters.ftol = lm.parameters.xtol = 1e-12;
+  lm.parameters.maxfev = 100 * (n + 1);
+  Eigen::VectorXd x = Eigen::VectorXd::Constant(n, std::log(k_initial));
+  PerFootCalibrationResult res;
+  res.lm_status = static_cast<int>(lm.minimize(x));
+  res.k = x.array().exp();
+  Eigen::VectorXd r(measurements);
+  diff(x, r);
+  res.mean_error = r.cwiseAbs().mean();
+  res.max_error = r.cwiseAbs().maxCoeff();
+  res.sag_solves = diff.solves;  // NumericalDiff holds its own copy of the functor
   return res;
 }
 

@@ -42,6 +42,16 @@ struct CalibrationResult {
   int sag_solves = 0;
 };
 
+/// Per-foot constants (§5.1.4: unequal tyre pressures): k_i multiplies column i of every stance's
+/// relative stiffness.
+struct PerFootCalibrationResult {
+  Eigen::VectorXd k;        ///< one constant per foot [N/m]
+  double mean_error = 0.0;  ///< mean absolute height error [m]
+  double max_error = 0.0;   ///< largest absolute height error [m]
+  int sag_solves = 0;
+  int lm_status = 0;        ///< Eigen LevenbergMarquardt status (1–4: converged)
+};
+
 /// Mean absolute height error of the stances with spring constant k (+inf if any stance's sag
 /// solve does not converge). Validates the stances (std::invalid_argument naming the field).
 double mean_height_error(const std::vector<CalibrationStance>& stances, double k,
@@ -51,5 +61,13 @@ double mean_height_error(const std::vector<CalibrationStance>& stances, double k
 /// invalid options.
 CalibrationResult calibrate_spring_constant(const std::vector<CalibrationStance>& stances,
                                             const CalibrationOptions& options = {});
+
+/// Per-foot constants by least squares on the height errors: Eigen's LevenbergMarquardt with a
+/// forward-difference Jacobian (Eigen::NumericalDiff) over log k_i, started from `k_initial`
+/// (e.g. the single constant of calibrate_spring_constant). Every stance must have the same
+/// number of feet, and there must be at least as many measured heights as feet.
+PerFootCalibrationResult calibrate_per_foot_constants(
+    const std::vector<CalibrationStance>& stances, double k_initial,
+    const SagOptions& options = {});
 
 }  // namespace ernest::statics

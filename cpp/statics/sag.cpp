@@ -99,16 +99,19 @@ struct SagFunctor {
   // Eqs 10–12 in the spring frame F: d = F^T Δr, compression c = -(d_z + Δh); loaded iff c > 0.
   // Inside the LM the contact set is held fixed (`active`: a bilateral spring, c of any sign),
   // so the residuals are smooth; solve_sag switches the set until it is consistent with eqs
-  // 10–12.
-  bool spring(int i, const Eigen::Vector3d& dr, Eigen::Vector3d& f) const {
-    const Eigen::Vector3d d = p.spring_frame.transpose() * dr;
-    const double c = -(d.z() + lift(i));
+  // 10–12. Writes f and, if J is given, ∂f/∂Δr. Returns whether the foot carries force.
+  bool spring(int i, const Eigen::Vector3d& dr, Eigen::Vector3d& f,
+              Eigen::Matrix3d* J = nullptr) const {
     if (!active[i]) {
       f.setZero();
       return false;
     }
-    f = p.spring_frame * Eigen::Vector3d(-p.stiffness(0, i) * d.x(), -p.stiffness(1, i) * d.y(),
-                                         p.stiffness(2, i) * c);
+    const Eigen::Matrix3d& F = p.spring_frame;
+    const Eigen::Vector3d d = F.transpose() * dr;
+    const double c = -(d.z() + lift(i));
+    f = F * Eigen::Vector3d(-p.stiffness(0, i) * d.x(), -p.stiffness(1, i) * d.y(),
+                            p.stiffness(2, i) * c);
+    if (J) *J = -F * p.stiffness.col(i).asDiagonal() * F.transpose();
     return true;
   }
   double compression(int i, const Eigen::Vector3d& dr) const {
@@ -140,12 +143,10 @@ struct SagFunctor {
 
   int df(const Eigen::VectorXd& x, Eigen::MatrixXd& J) const {
     J.setZero();
-    const Eigen::Matrix3d F = p.spring_frame;
     Eigen::Vector3d f;
     for (int i = 0; i < n; ++i) {
-      if (!spring(i, x.segment<3>(3 * i), f)) continue;
-      const Eigen::Matrix3d Jf =
-          -F * p.stiffness.col(i).asDiagonal() * F.transpose();  // ∂f_i/∂Δr_i when loaded
+      Eigen::Matrix3d Jf;  // ∂f_i/∂Δr_i
+      if (!spring(i, x.segment<3>(3 * i), f, &Jf)) continue;
       J.block<3, 3>(0, 3 * i) = Jf / W;
       J.block<3, 3>(3, 3 * i) = (-skew(f) + skew(foot(x, i) - o) * Jf) / (W * L);
     }
@@ -262,40 +263,119 @@ SagResult solve_sag(const SagProblem& problem, const SagOptions& options) {
   Eigen::VectorXd x(3 * n + 3);
   for (int i = 0; i <= n; ++i) x.segment<3>(3 * i) = sink * down;
 
-  // Active set over the LM (eqs 10–12's "if in contact"): start with the feet the initial sink
-  // loads, solve the smooth system, then move the worst violator (a loaded foot in tension, or
-  // an unloaded one pressed into the ground) across, until none is left. A unilateral spring
-  // inside the LM instead stalls: a foot that an iterate lifts has no gradient to come back.
-  for (int i = 0; i < n; ++i) fn.active[i] = fn.compression(i, x.segment<3>(3 * i)) > 0.0;
-  const int max_switches = 4 * n;
-  bool consistent = false;
-  for (int round = 0; round <= max_switches; ++round) {
+  auto run_lm = [&](Eigen::VectorXd& y) {
     Eigen::LevenbergMarquardt<SagFunctor> lm(fn);
     lm.parameters.ftol = options.tolerance;
     lm.parameters.xtol = options.tolerance;
     lm.parameters.maxfev = options.max_evaluations;
-    lm.minimize(x);
+    lm.minimize(y);
     res.evaluations += static_cast<int>(lm.nfev);
-    if (!x.allFinite()) break;
-    // The worst violator: a loaded foot in tension (beyond rounding), or a foot in the air that
-    // penetrates the ground by more than contact_tolerance (see SagOptions for why a little is
-    // accepted).
-    int worst = -1;
-    double worst_depth = 0.0;
-    for (int i = 0; i < n; ++i) {
-      const double c = fn.compression(i, x.segment<3>(3 * i));
-      const double depth = fn.active[i] ? -c - 1e-12 * fn.delta : c - options.contact_tolerance;
-      if (depth > worst_depth) {
-        worst_depth = depth;
-        worst = i;
+    Eigen::VectorXd r(fn.values());
+    fn(y, r);
+    return y.allFinite() && r.head<6>().norm() <= options.equilibrium_tolerance;
+  };
+  // Active set over the LM (eqs 10–12's "if in contact" exactly): start with the feet the
+  // state x loads, solve with the set fixed, then switch one foot (below) until every foot obeys
+  // eqs 10–12. A unilateral spring inside the LM instead stalls: a foot that an iterate lifts
+  // has no gradient to come back. Returns whether a consistent set was found; `tips` whether it
+  // failed because a foot that had to unload left feet that cannot hold the robot.
+  auto active_set = [&](Eigen::VectorXd& x, bool& tips, bool keep_set) {
+    if (!keep_set) {
+      for (int i = 0; i < n; ++i) fn.active[i] = fn.compression(i, x.segment<3>(3 * i)) > 0.0;
+    }
+    // Never start on fewer than three feet (the LM would find a spurious equilibrium of a rigid
+    // body on two bilateral springs): add the least lifted ones.
+    while (std::count(fn.active.begin(), fn.active.end(), 1) < 3) {
+      int best = -1;
+      for (int i = 0; i < n; ++i) {
+        if (fn.active[i] || !std::isfinite(fn.lift(i))) continue;
+        if (best < 0 || fn.compression(i, x.segment<3>(3 * i)) >
+                            fn.compression(best, x.segment<3>(3 * best))) {
+          best = i;
+        }
+      }
+      if (best < 0) break;
+      fn.active[best] = 1;
+    }
+    tips = false;
+    const int max_switches = 4 * n;
+    bool consistent = false;
+    int flipped = -1;
+    auto unflip = [&] {
+      tips = flipped >= 0 && fn.active[flipped] == 0;
+      if (flipped >= 0) fn.active[flipped] = !fn.active[flipped];
+    };
+    for (int round = 0; round <= max_switches; ++round) {
+      Eigen::VectorXd y = x;
+      if (!run_lm(y)) {  // no equilibrium on this set: keep the last solved state and its set
+        unflip();
+        break;
+      }
+      x = y;
+      // The next switch: the foot in the air that penetrates the ground deepest (beyond
+      // contact_tolerance: see SagOptions for why a little is accepted), else the loaded foot in
+      // the most tension (beyond rounding). Adding first never leaves too few feet to stand on.
+      int worst = -1;
+      double worst_depth = 0.0;
+      for (int pass = 0; pass < 2 && worst < 0; ++pass) {
+        for (int i = 0; i < n; ++i) {
+          if (fn.active[i] != pass) continue;  // pass 0: feet in the air; 1: loaded feet
+          const double c = fn.compression(i, x.segment<3>(3 * i));
+          const double depth = pass == 0 ? c - options.contact_tolerance : -c - 1e-12 * fn.delta;
+          if (depth > worst_depth) {
+            worst_depth = depth;
+            worst = i;
+          }
+        }
+      }
+      if (worst < 0) {
+        consistent = true;
+        break;
+      }
+      fn.active[worst] = !fn.active[worst];
+      flipped = worst;
+      if (std::count(fn.active.begin(), fn.active.end(), 1) < 3) {  // it cannot stand
+        unflip();
+        break;
       }
     }
-    if (worst < 0) {
-      consistent = true;
-      break;
+    return consistent;
+  };
+
+  // If that fails (typically: a foot that must unload leaves feet that cannot hold the robot,
+  // which then leans until a lifted foot comes down), a second start follows the quasi-static
+  // path FootFall's legs take: the lifts grow from zero (every foot that can touch is loaded) to
+  // their values in steps, each solved from the last, so a foot unloads gradually and the robot
+  // settles on the feet that catch it.
+  const Eigen::VectorXd final_lift = fn.lift;
+  auto lift_path = [&](Eigen::VectorXd& x, bool& tips) {
+    constexpr int kSteps = 8;
+    bool ok = false;
+    for (int step = 0; step <= kSteps; ++step) {
+      const double s = double(step) / kSteps;
+      for (int i = 0; i < n; ++i) {
+        fn.lift(i) = std::isfinite(final_lift(i)) ? s * final_lift(i) : final_lift(i);
+      }
+      ok = active_set(x, tips, step > 0);  // each step starts on the last step's feet
+      if (!ok) break;
     }
-    fn.active[worst] = !fn.active[worst];
-    if (std::count(fn.active.begin(), fn.active.end(), 1) < 3) break;  // it cannot stand
+    fn.lift = final_lift;
+    return ok;
+  };
+
+  const Eigen::VectorXd x0 = x;
+  bool tips = false;
+  bool consistent = active_set(x, tips, false);
+  if (!consistent) {  // second start along the lift path; keep the first attempt if it fails
+    const std::vector<char> first_set = fn.active;
+    Eigen::VectorXd y = x0;
+    bool tips2 = false;
+    if (lift_path(y, tips2)) {
+      x = y;
+      consistent = true;
+    } else {
+      fn.active = first_set;
+    }
   }
   if (!x.allFinite()) x.setZero();
 
@@ -344,7 +424,8 @@ SagResult solve_sag(const SagProblem& problem, const SagOptions& options) {
         m < 3 || m > kMaxContacts ||
         static_stability_margin(support_polygon(touchable.leftCols(m), frame), problem.cg,
                                 frame) < 0.0;
-    res.status = (outside || res.loaded < 3) ? SagStatus::Unstable : SagStatus::NotConverged;
+    res.status =
+        (outside || tips || res.loaded < 3) ? SagStatus::Unstable : SagStatus::NotConverged;
   }
   return res;
 }

@@ -12,7 +12,10 @@
 // (equilibrium), 6–7 (distances between successive and alternate feet) and 8 (CG to each foot),
 // over-constrained as the paper describes, solved by Eigen's LevenbergMarquardt with the set of
 // loaded feet held fixed (smooth residuals), inside an active-set loop that moves feet in or out
-// of contact until eqs 10–12's "if in contact" holds for every foot. The chassis
+// of contact until eqs 10–12's "if in contact" holds for every foot. If that loop fails (a foot
+// that must unload leaves feet that cannot hold the robot, which then leans onto a lifted foot),
+// it is retried along the quasi-static path of lifting: the lifts grow from zero in steps, each
+// solved from the last. The chassis
 // rotation is then backtracked (the paper's last step) as the rigid transform that best maps the
 // unsagged feet and CG onto the sagged ones (Eigen::umeyama). The vertical rigidity of the feet
 // comes from eq 8, so the CG must not lie in the plane of the feet.
@@ -24,7 +27,7 @@ namespace ernest::statics {
 
 /// One stance of the sag model. Vectors are in a fixed world frame [m], forces [N].
 struct SagProblem {
-  Eigen::Matrix3Xd feet;       ///< r_0,i: unsagged foot (fork) positions, eq 1; N >= 3 columns
+  Eigen::Matrix3Xd feet;       ///< r_0,i: unsagged foot (fork) positions, eq 1 (N < 3: Unstable)
   Eigen::Matrix3Xd stiffness;  ///< k_xx, k_yy, k_zz of each foot [N/m] (> 0), eq 3
   /// Δh_i, eq 9: how far foot i is above the point where it starts bearing load, along the
   /// spring frame's z axis (> 0 lifted, < 0 pre-compressed). Empty = all zeros. +inf marks a
@@ -60,8 +63,10 @@ struct SagOptions {
 
 enum class SagStatus {
   Converged,     ///< equilibrium found and at least three feet loaded
-  Unstable,      ///< no static equilibrium: fewer than three feet can be loaded, or the CG
-                 ///< projects outside their support polygon (the robot tips over)
+  Unstable,      ///< no static equilibrium: fewer than three feet can be loaded, the CG
+                 ///< projects outside their support polygon, or a foot that must unload
+                 ///< leaves feet that cannot hold the robot (it tips on its compliant contacts,
+                 ///< e.g. a high CG near an edge)
   NotConverged,  ///< LM stopped without reaching equilibrium although the stance looks stable
 };
 

@@ -267,6 +267,15 @@ class CalibrationResult:
     grid_error: Array
     sag_solves: int
 
+class PerFootCalibrationResult:
+    k: Array
+    mean_error: float
+    max_error: float
+    sag_solves: int
+    lm_status: int
+
+def calibrate_per_foot_constants(stances: Sequence[CalibrationStance], k_initial: float,
+                                 options: SagOptions = ...) -> PerFootCalibrationResult: ...
 def mean_height_error(stances: Sequence[CalibrationStance], k: float,
                       options: SagOptions = ...) -> float: ...
 def calibrate_spring_constant(stances: Sequence[CalibrationStance],

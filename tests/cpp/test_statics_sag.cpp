@@ -181,7 +181,9 @@ TEST(Sag, EveryCombinationOfFeetInTheAir) {
       EXPECT_LT(r.equilibrium_residual, 1e-9);
       EXPECT_LT(r.rigidity_residual, 1e-9);
       for (int i = 0; i < 6; ++i) {
-        if (mask & (1 << i)) EXPECT_EQ(r.forces.col(i).norm(), 0.0);
+        if (mask & (1 << i)) {
+          EXPECT_EQ(r.forces.col(i).norm(), 0.0);
+        }
         EXPECT_GE(r.forces(2, i), 0.0);
       }
     } else {
@@ -190,6 +192,27 @@ TEST(Sag, EveryCombinationOfFeetInTheAir) {
   }
   EXPECT_GE(stable, 22);  // all 6, 5 (6 ways), 4 (15 ways, all with SSM > 0.3 or marginal) ...
   EXPECT_GE(unstable, 22);  // ... fewer than 3 (22 ways)
+}
+
+TEST(Sag, LeansOntoALiftedFootThatCatchesIt) {
+  // Square stance, foot 0 at (1, 1) lifted 1 cm (three times the sag); the CG at (0.3, 0.3) is outside the triangle of
+  // the three touching feet, so the robot leans until foot 0 touches and carries load.
+  SagProblem p;
+  p.feet.resize(3, 4);
+  p.feet << 1, -1, -1, 1, 1, 1, -1, -1, 0.01, 0, 0, 0;
+  p.stiffness = Eigen::Matrix3Xd::Constant(3, 4, 1e5);
+  p.lift = Eigen::VectorXd::Zero(4);
+  p.lift(0) = 0.01;
+  p.cg << 0.3, 0.3, 1.0;
+  p.mass = 100.0;
+  const SagResult r = solve_sag(p);
+  ASSERT_EQ(r.status, SagStatus::Converged);
+  EXPECT_GT(r.forces(2, 0), 0.0);
+  EXPECT_GT(r.compression(0), 0.0);
+  EXPECT_LT(r.equilibrium_residual, 1e-9);
+  // Feet 0 and 2 lie on the CG's diagonal: foot 2, opposite, carries the least.
+  EXPECT_LT(r.forces(2, 2), r.forces(2, 1));
+  for (int i = 0; i < 4; ++i) EXPECT_GE(r.forces(2, i), 0.0);
 }
 
 TEST(Sag, RotatingTheWholeProblemRotatesTheAnswer) {
@@ -318,4 +341,23 @@ TEST(SagCalibration, InvalidInputNamesTheField) {
             std::string::npos);
   EXPECT_NE(invalid_argument_message([&] { calibrate_spring_constant({}); }).find("stances"),
             std::string::npos);
+}
+
+TEST(SagCalibration, RecoversPerFootConstants) {
+  // §5.1.4: tyre pressures within ±12.5 %; the per-foot fit recovers each constant from the
+  // same protocol (noise-free), starting from the single best constant.
+  const Eigen::VectorXd truth = (Eigen::VectorXd(6) << 1.0, 1.1, 0.9, 1.125, 0.875, 1.05).finished() * 8e4;
+  std::vector<CalibrationStance> st = synthetic_stances(1.0, 0.0, 1);
+  for (CalibrationStance& s : st) {  // re-measure with the per-foot constants
+    SagProblem p = s.problem;
+    for (int i = 0; i < 6; ++i) p.stiffness.col(i) *= truth(i);
+    s.measured_heights = solve_sag(p).body_points.row(2).transpose();
+  }
+  const CalibrationResult single = calibrate_spring_constant(st);
+  EXPECT_GT(single.mean_error, 1e-5);  // one constant cannot explain unequal tyres
+  const PerFootCalibrationResult r = calibrate_per_foot_constants(st, single.k);
+  EXPECT_GE(r.lm_status, 1);
+  EXPECT_LE(r.lm_status, 4);
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(r.k(i), truth(i), 1e-4 * truth(i)) << i;
+  EXPECT_LT(r.mean_error, 1e-9);
 }

@@ -110,3 +110,7 @@ def test_calibration_recovers_a_known_constant():
     r = S.calibrate_spring_constant(stances, opts)
     assert r.k == pytest.approx(6e4, rel=1e-4)
     assert r.mean_error < 1e-7 and len(r.grid_k) == 21
+    per_foot = S.calibrate_per_foot_constants(stances, r.k)
+    np.testing.assert_allclose(per_foot.k, 6e4, rtol=1e-4)
+    with pytest.raises(ValueError, match="k_initial"):
+        S.calibrate_per_foot_constants(stances, -1.0)
