@@ -251,7 +251,9 @@ def test_wet_sand_immobilises_the_passive_bogie_while_the_crawling_gait_climbs()
     # 60 s (travel reduction 100 %); a gimbal gait still climbs. Ours at dt and at dt / 4.
     from ernest_cpp.evaluate import run_episode
 
-    for dt in (0.025, 0.00625):
+    from ernest_cpp.dynamics import SimOptions
+
+    for dt in (SimOptions().dt, SimOptions().dt / 4):
         kw = {"soil": "wet_sand", "physics_dt": dt}
         m_p, *_ = run_episode("ernest/SlopeEval-v0", kw, PassiveController(), True, 0)
         m_c, *_ = run_episode("ernest/SlopeEval-v0", kw, CrawlingGaitController(), False, 0)
@@ -259,15 +261,24 @@ def test_wet_sand_immobilises_the_passive_bogie_while_the_crawling_gait_climbs()
         assert m_c["progress"] > 3.0 and m_c["travel_reduction"] < 0.7
 
 
-def test_obstacle_slip_does_not_depend_on_the_collision_point_count():
-    # Issue 13 item 1 regression (benchmarks/RESULTS.md, "step independence"): the crawling gait
-    # pushing against the Bickler trap's boxes, whose energy was 5.2-5.7 % apart between dt and
-    # dt / 4 while the box contacts' force-dependent slip was per collision point (ODE returns 4
-    # or 6 points there, depending on the step); shared per wheel-box pair like the stiffness.
+@pytest.mark.parametrize("env_id, controller, passive", [
+    ("ernest/BicklerTrap-v0", CrawlingGaitController, False),  # pushing against the boxes
+    ("ernest/BicklerTrap-v0", PassiveController, True),        # wheels spinning against a box face
+    ("ernest/Course-v0", PassiveController, True),             # rocking on the first sand ripple
+    ("ernest/SlopeEval-v0", CrawlingGaitController, False),    # lifting a wheel on the 20 deg slope
+])
+def test_evaluation_results_do_not_depend_on_the_step(env_id, controller, passive):
+    # Issue 13 item 1 (benchmarks/RESULTS.md, "step independence"): travel reduction within 2 pp
+    # and cost of transport within 5 % between the default step and a quarter of it. Each row
+    # failed before one fix: the box contacts' force-dependent slip per collision point (ODE
+    # returns 4 or 6 of them, with the step), the §3.4 contact under-resolved without substeps
+    # (the wheel climbing the box face and falling back only below dt / 4), the soil levels
+    # lagging a step, eq 32's pressure spring explicit in the sinkage at 0.025 s.
+    from ernest_cpp.dynamics import SimOptions
     from ernest_cpp.evaluate import run_episode
 
-    m = [run_episode("ernest/BicklerTrap-v0", {"physics_dt": dt}, CrawlingGaitController(), False, 0)[0]
-         for dt in (0.025, 0.00625)]
+    dt = SimOptions().dt
+    m = [run_episode(env_id, {"physics_dt": h}, controller(), passive, 0)[0] for h in (dt, dt / 4)]
     assert abs(m[0]["travel_reduction"] - m[1]["travel_reduction"]) < 0.02
     assert m[0]["progress"] > 0.5 and m[1]["progress"] > 0.5
     assert abs(m[0]["cost_of_transport"] / m[1]["cost_of_transport"] - 1) < 0.05
