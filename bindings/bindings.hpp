@@ -9,4 +9,5 @@ void bind_dynamics(pybind11::module_& m);
 void bind_opt(pybind11::module_& m);
 void bind_sensing(pybind11::module_& m);
 void bind_envs(pybind11::module_& m);
+void bind_perception(pybind11::module_& m);
 }  // namespace ernest::bindings

@@ -18,4 +18,7 @@ PYBIND11_MODULE(_core, m) {
   auto sensing = m.def_submodule(
       "sensing", "Force–torque processing, elevation sampling, observation and reward (seed 004 §4.2–4.3)");
   ernest::bindings::bind_sensing(sensing);
+  auto perception = m.def_submodule(
+      "perception", "Simulated stereo cameras, OpenCV stereo and the elevation map (seed 004 §2.4)");
+  ernest::bindings::bind_perception(perception);
 }

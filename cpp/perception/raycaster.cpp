@@ -72,6 +72,7 @@ Raycaster::Raycaster(const dynamics::HeightMap& terrain,
   if (h.rows() > 1) mx = (h.bottomRows(h.rows() - 1) - h.topRows(h.rows() - 1)).cwiseAbs().maxCoeff();
   if (h.cols() > 1) my = (h.rightCols(h.cols() - 1) - h.leftCols(h.cols() - 1)).cwiseAbs().maxCoeff();
   lipschitz_ = std::hypot(mx, my) / terrain_.spacing();
+  top_ = h.maxCoeff() + 1.0;
   for (const auto& b : boxes) {
     b.validate();
     Box q;
@@ -83,6 +84,7 @@ Raycaster::Raycaster(const dynamics::HeightMap& terrain,
     q.centre = b.centre;
     q.half = 0.5 * b.size;
     q.radius = q.half.norm();
+    top_ = std::max(top_, b.centre.z() + q.radius + 1.0);
     boxes_.push_back(q);
   }
   sun_ = Eigen::Vector3d(std::cos(options_.sun_elevation) * std::cos(options_.sun_azimuth),
@@ -181,6 +183,16 @@ bool Raycaster::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, do
   }
   t = best;
   return hit;
+}
+
+double Raycaster::surface_height(double x, double y) const {
+  const Eigen::Vector3d o(x, y, top_);
+  double t;
+  Eigen::Vector3d n;
+  // the height map continues flat beyond its border, so a vertical ray always hits (max_range
+  // permitting: fall back to the terrain if the drop is longer)
+  if (!intersect(o, -Eigen::Vector3d::UnitZ(), t, n)) return terrain_.height(x, y);
+  return top_ - t;
 }
 
 double Raycaster::texture(const Eigen::Vector3d& p, double footprint) const {

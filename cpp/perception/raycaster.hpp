@@ -52,6 +52,8 @@ class Raycaster {
   /// none within max_range.
   bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& t,
                  Eigen::Vector3d& normal) const;
+  /// Height of the top surface (terrain or box top) at (x, y): a vertical ray cast from above.
+  double surface_height(double x, double y) const;
   /// Band-limited texture value in ~[-1, 1] at a world point for a footprint [m].
   double texture(const Eigen::Vector3d& p, double footprint) const;
 
@@ -72,6 +74,7 @@ class Raycaster {
   std::vector<Box> boxes_;
   RenderOptions options_;
   double lipschitz_ = 0.0;  // bound on |grad h| of the bilinear surface
+  double top_ = 0.0;        // above every surface
   Eigen::Vector3d sun_;
 };
 

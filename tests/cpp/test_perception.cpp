@@ -174,6 +174,25 @@ TEST(PerceptionRaycaster, BoxFaceAndDeterminism) {
   EXPECT_NEAR((n - Eigen::Vector3d(-1, 0, 0)).norm(), 0.0, 1e-12);
 }
 
+TEST(PerceptionRaycaster, SurfaceHeightAgreesWithTheEnvironmentsTruth) {
+  // Two independent implementations of "top of terrain and boxes": vertical ray cast here, the
+  // slab-method column query of envs::TerrainHeightSource (what the observation uses today).
+  RockScene scene;
+  Raycaster rc(scene.terrain, scene.rocks);
+  envs::TerrainHeightSource truth(scene.terrain, scene.rocks);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> ux(1.5, 6.5), uy(-2.5, 2.5);
+  int on_rock = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const double x = ux(rng), y = uy(rng);
+    double z;
+    truth.height(x, y, z);
+    EXPECT_NEAR(rc.surface_height(x, y), z, 1e-6) << x << "," << y;
+    on_rock += z > scene.terrain.height(x, y) + 1e-6;
+  }
+  EXPECT_GT(on_rock, 20);
+}
+
 // ---- stereo ----------------------------------------------------------------------------------
 
 class PerceptionStereo : public ::testing::TestWithParam<StereoAlgorithm> {};
