@@ -5,11 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import evaluate, reproduce, slope_demo, soil_curves, transitions
+from . import evaluate, perception_demo, reproduce, slope_demo, soil_curves, transitions
 from .rl import commands as rl_commands
 
 # Each module exposes add_parser(subparsers) and sets `func` on its parser.
-_COMMANDS = [soil_curves, evaluate, rl_commands, transitions, slope_demo, reproduce]
+_COMMANDS = [soil_curves, evaluate, rl_commands, transitions, slope_demo, reproduce,
+             perception_demo]
 
 
 def main(argv: list[str] | None = None) -> int:

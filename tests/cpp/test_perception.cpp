@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "test_util.hpp"
+#include "ernest/envs/rover_env.hpp"
 #include "ernest/envs/terrain_source.hpp"
 #include "ernest/perception/stereo_mapper.hpp"
 
@@ -538,4 +539,40 @@ TEST(PerceptionMapper, FusesAtTheFusionRate) {
   EXPECT_EQ(m.frames(), 0u);
   double z;
   EXPECT_FALSE(m.map().height(2.0, 0.0, z));
+}
+
+// ---- environments ----------------------------------------------------------------------------
+
+TEST(PerceptionEnv, StereoTerrainSourceFeedsTheSamples) {
+  envs::EnvOptions o;
+  o.scenario.kind = envs::ScenarioKind::Flat;
+  EXPECT_EQ(o.terrain_source, "truth");  // default: ground truth, existing results hold
+  envs::RoverEnv truth_env(dynamics::RoverParameters{}, o);
+  truth_env.reset(5);
+  EXPECT_EQ(truth_env.mapper(), nullptr);
+  o.terrain_source = "stereo";
+  envs::RoverEnv env(dynamics::RoverParameters{}, o);
+  env.reset(5);
+  ASSERT_NE(env.mapper(), nullptr);
+  EXPECT_EQ(env.mapper()->frames(), 1u);  // a frame at reset
+  sensing::ActionVector forward(1.0, 0.0, 0.0);
+  for (int k = 0; k < 4; ++k) env.step(forward);  // 2 s at 2 Hz: the 0.5 Hz fusion fires once
+  EXPECT_EQ(env.mapper()->frames(), 2u);
+  for (int k = 0; k < 12; ++k) truth_env.step(forward);
+  for (int k = 0; k < 8; ++k) env.step(forward);
+  // after 6 s at 0.2 m/s the front samples lie on mapped flat ground: close to the truth's
+  const auto& e = env.elevation();
+  int measured = 0;
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_TRUE(std::isfinite(e.values[k]));
+    if (e.source[k] == 0) {
+      ++measured;
+      EXPECT_NEAR(e.values[k], truth_env.elevation().values[k], 0.05) << k;
+    }
+  }
+  EXPECT_GT(measured, 0);
+  EXPECT_TRUE(env.mapper()->map().consistent());
+  o.terrain_source = "lidar";
+  EXPECT_NE(invalid_argument_message([&] { o.validate(); }).find("terrain_source = 'lidar'"),
+            std::string::npos);
 }
