@@ -75,6 +75,8 @@ void ElevationMap::move_to(double x, double y) {
   }
   gi0_ = gi0;
   gj0_ = gj0;
+  ring_i_ = ((gi0 % n_) + n_) % n_;
+  ring_j_ = ((gj0 % n_) + n_) % n_;
   placed_ = true;
 }
 
@@ -106,9 +108,12 @@ FuseStats ElevationMap::fuse_cloud(const Eigen::Ref<const Points>& points,
     world_.resize(points.rows(), 3);
     point_var_.resize(points.rows());
   }
+  // measurement_variance() inlined with its constants hoisted (this loop runs per pixel)
+  const double k = options_.disparity_sigma / (camera.focal() * camera.baseline);
+  const Eigen::RowVector3d rz = r.row(2);
   Eigen::Index m = 0;
-  for (Eigen::Index k = 0; k < points.rows(); ++k) {
-    const Eigen::Vector3d p = points.row(k).transpose();
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const Eigen::Vector3d p = points.row(i).transpose();
     if (!p.allFinite()) {
       ++stats.non_finite;
       continue;
@@ -118,7 +123,8 @@ FuseStats ElevationMap::fuse_cloud(const Eigen::Ref<const Points>& points,
       continue;
     }
     world_.row(m) = (r * p + t).transpose();
-    point_var_[m] = measurement_variance(p, r, camera);
+    const double jz_sigma = rz.dot(p) * p.z() * k;  // (e_z . R p / Z) * Z^2 k
+    point_var_[m] = jz_sigma * jz_sigma + options_.pose_variance;
     ++m;
   }
   const FuseStats inner = fuse_points(world_.topRows(m), point_var_.head(m));
@@ -154,7 +160,11 @@ FuseStats ElevationMap::fuse_points(const Eigen::Ref<const Points>& points,
       ++stats.outside_map;
       continue;
     }
-    const std::int64_t s = slot(static_cast<std::int64_t>(fi), static_cast<std::int64_t>(fj));
+    // storage index without a division: the window offset wrapped once past the ring start
+    std::int64_t si = static_cast<std::int64_t>(fi) - gi0_ + ring_i_, sj = static_cast<std::int64_t>(fj) - gj0_ + ring_j_;
+    if (si >= n_) si -= n_;
+    if (sj >= n_) sj -= n_;
+    const std::int64_t s = si * n_ + sj;
     if (acc_n_[s] == 0) touched_.push_back(s);
     acc_h_[s] += static_cast<float>(z);
     acc_v_[s] += static_cast<float>(v);

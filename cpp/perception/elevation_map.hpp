@@ -102,6 +102,7 @@ class ElevationMap : public sensing::HeightSource {
   ElevationMapOptions options_;
   int n_ = 0;
   std::int64_t gi0_ = 0, gj0_ = 0;  // global index of the window's first cell
+  std::int64_t ring_i_ = 0, ring_j_ = 0;  // its storage slot (gi0_ mod n, gj0_ mod n)
   bool placed_ = false;
   std::vector<float> height_, variance_;
   // per-call accumulators (reset through touched_): sum of heights, of variances, count

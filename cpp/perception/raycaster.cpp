@@ -20,9 +20,10 @@ std::uint64_t splitmix(std::uint64_t x) {
 
 // Value in [-1, 1] at an integer lattice point.
 double lattice(std::int64_t x, std::int64_t y, std::int64_t z, std::uint64_t seed) {
-  std::uint64_t h = splitmix(seed ^ static_cast<std::uint64_t>(x));
-  h = splitmix(h ^ static_cast<std::uint64_t>(y));
-  h = splitmix(h ^ static_cast<std::uint64_t>(z));
+  // one mixing round over a linear combination with large odd constants (distinct per axis)
+  const std::uint64_t h = splitmix(seed ^ (static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ULL) ^
+                                   (static_cast<std::uint64_t>(y) * 0xC2B2AE3D27D4EB4FULL) ^
+                                   (static_cast<std::uint64_t>(z) * 0x165667B19E3779F9ULL));
   return static_cast<double>(h >> 11) * (2.0 / 9007199254740992.0) - 1.0;
 }
 
@@ -85,6 +86,7 @@ Raycaster::Raycaster(const dynamics::HeightMap& terrain,
     q.half = 0.5 * b.size;
     q.radius = q.half.norm();
     top_ = std::max(top_, b.centre.z() + q.radius + 1.0);
+    all_boxes_.push_back(static_cast<int>(boxes_.size()));
     boxes_.push_back(q);
   }
   sun_ = Eigen::Vector3d(std::cos(options_.sun_elevation) * std::cos(options_.sun_azimuth),
@@ -143,9 +145,15 @@ bool Raycaster::intersect_terrain(const Eigen::Vector3d& o, const Eigen::Vector3
 
 bool Raycaster::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& t,
                           Eigen::Vector3d& normal) const {
+  return intersect_boxes(o, d, t, normal, all_boxes_.data(), static_cast<int>(all_boxes_.size()));
+}
+
+bool Raycaster::intersect_boxes(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& t,
+                                Eigen::Vector3d& normal, const int* candidates, int count) const {
   double best = options_.max_range;
   bool hit = false;
-  for (const Box& b : boxes_) {
+  for (int c_i = 0; c_i < count; ++c_i) {
+    const Box& b = boxes_[candidates[c_i]];
     const Eigen::Vector3d oc = o - b.centre;
     const double along = oc.dot(d), c = oc.squaredNorm() - b.radius * b.radius;
     if (c > 0.0 && (along > 0.0 || along * along < c)) continue;  // misses the bounding sphere
@@ -223,15 +231,48 @@ void Raycaster::render(const Eigen::Isometry3d& pose, const StereoCameraParamete
   const Eigen::Vector3d o = pose.translation();
   std::mt19937_64 rng(splitmix(options_.seed ^ splitmix(frame + 0x51ED)));
   std::normal_distribution<double> noise(0.0, 1.0);
+  // Box culling per 16 x 16 pixel tile: a box can only be hit inside the image rectangle that
+  // bounds the projection of its bounding sphere (conservative: corners of x/z and y/z over the
+  // sphere's box); a sphere reaching behind the image plane goes into every tile.
+  constexpr int kTile = 16;
+  const int tw = (w + kTile - 1) / kTile, th = (h + kTile - 1) / kTile;
+  std::vector<std::vector<int>> tiles(static_cast<std::size_t>(tw) * th);
+  const Eigen::Matrix3d rt = r.transpose();
+  for (std::size_t i = 0; i < boxes_.size(); ++i) {
+    const Eigen::Vector3d c = rt * (boxes_[i].centre - o);
+    const double rad = boxes_[i].radius;
+    if (c.z() + rad <= 0.0 || c.norm() - rad > options_.max_range) continue;  // behind or too far
+    int u0 = 0, u1 = tw - 1, v0 = 0, v1 = th - 1;
+    if (c.z() - rad > 1e-3) {
+      auto lo_hi = [&](double a, double& lo, double& hi) {
+        const double q[4] = {(a - rad) / (c.z() - rad), (a - rad) / (c.z() + rad),
+                             (a + rad) / (c.z() - rad), (a + rad) / (c.z() + rad)};
+        lo = *std::min_element(q, q + 4);
+        hi = *std::max_element(q, q + 4);
+      };
+      double xl, xh, yl, yh;
+      lo_hi(c.x(), xl, xh);
+      lo_hi(c.y(), yl, yh);
+      const double ul = cx + f * xl, uh = cx + f * xh, vl = cy + f * yl, vh = cy + f * yh;
+      if (uh < -1.0 || ul > w || vh < -1.0 || vl > h) continue;  // off the image
+      u0 = std::clamp(static_cast<int>(std::floor(ul)) / kTile, 0, tw - 1);
+      u1 = std::clamp(static_cast<int>(std::ceil(uh)) / kTile, 0, tw - 1);
+      v0 = std::clamp(static_cast<int>(std::floor(vl)) / kTile, 0, th - 1);
+      v1 = std::clamp(static_cast<int>(std::ceil(vh)) / kTile, 0, th - 1);
+    }
+    for (int tv = v0; tv <= v1; ++tv)
+      for (int tu = u0; tu <= u1; ++tu) tiles[static_cast<std::size_t>(tv) * tw + tu].push_back(static_cast<int>(i));
+  }
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
+      const std::vector<int>& cand = tiles[static_cast<std::size_t>(v / kTile) * tw + u / kTile];
       const Eigen::Vector3d ray_cam((u - cx) / f, (v - cy) / f, 1.0);
       const double len = ray_cam.norm();
       const Eigen::Vector3d d = r * ray_cam / len;
       double t;
       Eigen::Vector3d n;
       double value = options_.sky;
-      if (intersect(o, d, t, n)) {
+      if (intersect_boxes(o, d, t, n, cand.data(), static_cast<int>(cand.size()))) {
         depth(v, u) = static_cast<float>(t / len);  // z along the optical axis
         const Eigen::Vector3d p = o + t * d;
         const double cosine = std::max(std::abs(n.dot(d)), 0.1);

@@ -69,9 +69,13 @@ class Raycaster {
   };
   bool intersect_terrain(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_max,
                          double& t) const;
+  // intersect() over a subset of the boxes (the candidates of one image tile)
+  bool intersect_boxes(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& t,
+                       Eigen::Vector3d& normal, const int* boxes, int count) const;
 
   dynamics::HeightMap terrain_;
   std::vector<Box> boxes_;
+  std::vector<int> all_boxes_;  // 0 .. n-1
   RenderOptions options_;
   double lipschitz_ = 0.0;  // bound on |grad h| of the bilinear surface
   double top_ = 0.0;        // above every surface
