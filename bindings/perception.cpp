@@ -140,6 +140,9 @@ void bind_perception(py::module_& m) {
            "Disparity [px] (float32, NaN = no match) of two uint8 images of equal size.")
       .def_property_readonly("options", &StereoMatcher::options);
 
+  m.def("set_opencv_threads", &set_opencv_threads, "threads"_a,
+        "Threads the C++ OpenCV may use (cv::setNumThreads, process-wide).");
+  m.def("opencv_threads", &opencv_threads, "Threads the C++ OpenCV uses (cv::getNumThreads).");
   m.def(
       "disparity_to_points",
       [](const FloatImage& disparity, const StereoCameraParameters& camera, double min_disparity,

@@ -82,6 +82,13 @@ FloatImage StereoMatcher::compute(const GrayImage& left, const GrayImage& right)
   return out;
 }
 
+void set_opencv_threads(int threads) {
+  require_in_range("set_opencv_threads", "threads", threads, 0, 1024);
+  cv::setNumThreads(threads);
+}
+
+int opencv_threads() { return cv::getNumThreads(); }
+
 PointCloud disparity_to_points(const FloatImage& disparity, const StereoCameraParameters& camera,
                                double min_disparity, double max_depth) {
   camera.validate();

@@ -52,6 +52,11 @@ class StereoMatcher {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Threads OpenCV may use for matching (cv::setNumThreads; 0 = sequential, as 1). Process-wide.
+void set_opencv_threads(int threads);
+/// Threads OpenCV currently uses (cv::getNumThreads).
+int opencv_threads();
+
 /// Back-projection of a rectified disparity (Z = f B / d, X = (u - cx) Z / f, Y = (v - cy) Z / f):
 /// the point cloud of the valid (finite, > min_disparity) pixels with depth <= max_depth.
 /// Throws std::invalid_argument if the disparity size differs from the camera's.

@@ -17,4 +17,6 @@ from ._core.perception import (  # noqa: F401  (re-exports)
     StereoMatcher,
     StereoMatcherOptions,
     disparity_to_points,
+    opencv_threads,
+    set_opencv_threads,
 )
