@@ -131,6 +131,8 @@ void bind_perception(py::module_& m) {
       .def_readwrite("speckle_window", &StereoMatcherOptions::speckle_window, "[px]")
       .def_readwrite("speckle_range", &StereoMatcherOptions::speckle_range, "[px]")
       .def_readwrite("pre_filter_cap", &StereoMatcherOptions::pre_filter_cap)
+      .def_readwrite("max_lr_difference", &StereoMatcherOptions::max_lr_difference,
+                     "left-right check tolerance [px], -1 = off")
       .def("validate", &StereoMatcherOptions::validate, "Raise ValueError on an invalid field.");
 
   py::class_<StereoMatcher>(m, "StereoMatcher", "OpenCV stereo matcher (StereoBM by default).")

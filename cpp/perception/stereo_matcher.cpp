@@ -4,6 +4,7 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <cstdlib>
 
 #include "ernest/common/validation.hpp"
 
@@ -26,6 +27,7 @@ void StereoMatcherOptions::validate() const {
   require_in_range(o, "speckle_window", speckle_window, 0, 10000);
   require_in_range(o, "speckle_range", speckle_range, 0, 1000);
   require_in_range(o, "pre_filter_cap", pre_filter_cap, 1, 63);
+  require_in_range(o, "max_lr_difference", max_lr_difference, -1, 1024);
 }
 
 struct StereoMatcher::Impl {
@@ -43,12 +45,14 @@ StereoMatcher::StereoMatcher(const StereoMatcherOptions& options)
     bm->setSpeckleWindowSize(o.speckle_window);
     bm->setSpeckleRange(o.speckle_range);
     bm->setPreFilterCap(o.pre_filter_cap);
+    // StereoBM does not apply disp12MaxDiff itself (measured, OpenCV 4.6): compute() checks the
+    // left-right consistency with a second match of the mirrored pair.
     impl_->matcher = bm;
   } else {
     // P1, P2: OpenCV's documented choice 8 and 32 x channels x block area
     const int area = o.block_size * o.block_size;
     impl_->matcher = cv::StereoSGBM::create(0, o.num_disparities, o.block_size, 8 * area, 32 * area,
-                                            1, o.pre_filter_cap, o.uniqueness_ratio,
+                                            o.max_lr_difference, o.pre_filter_cap, o.uniqueness_ratio,
                                             o.speckle_window, o.speckle_range,
                                             cv::StereoSGBM::MODE_SGBM);
   }
@@ -72,12 +76,33 @@ FloatImage StereoMatcher::compute(const GrayImage& left, const GrayImage& right)
   const cv::Mat r(h, w, CV_8UC1, const_cast<std::uint8_t*>(right.data()));
   cv::Mat disp16;
   impl_->matcher->compute(l, r, disp16);
+  // Right-image disparity for the left-right check: match the mirrored pair with the roles
+  // swapped (a right pixel u_R = u_L - d is, mirrored, the left pixel of a pair with disparity d).
+  const bool lr_check =
+      options_.algorithm == StereoAlgorithm::BlockMatching && options_.max_lr_difference >= 0;
+  cv::Mat right16;
+  if (lr_check) {
+    cv::Mat lf, rf, d;
+    cv::flip(l, lf, 1);
+    cv::flip(r, rf, 1);
+    impl_->matcher->compute(rf, lf, d);
+    cv::flip(d, right16, 1);
+  }
   FloatImage out(h, w);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const int min_valid = 16 * impl_->matcher->getMinDisparity();  // invalid = (min - 1) * 16
+  const int tol16 = 16 * options_.max_lr_difference;
   for (int v = 0; v < h; ++v) {
     const auto* row = disp16.ptr<std::int16_t>(v);
-    for (int u = 0; u < w; ++u) out(v, u) = row[u] >= min_valid ? row[u] / 16.0f : nan;
+    const auto* rrow = lr_check ? right16.ptr<std::int16_t>(v) : nullptr;
+    for (int u = 0; u < w; ++u) {
+      bool ok = row[u] >= min_valid;
+      if (ok && lr_check) {
+        const int ur = u - (row[u] + 8) / 16;
+        ok = ur >= 0 && rrow[ur] >= min_valid && std::abs(rrow[ur] - row[u]) <= tol16;
+      }
+      out(v, u) = ok ? row[u] / 16.0f : nan;
+    }
   }
   return out;
 }

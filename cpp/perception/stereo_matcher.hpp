@@ -23,6 +23,10 @@ struct StereoMatcherOptions {
   int speckle_window = 100;   ///< speckle filter region [px] (0 = off)
   int speckle_range = 2;      ///< disparity spread inside a speckle region [px]
   int pre_filter_cap = 31;
+  /// Left-right consistency: the largest disagreement [px] allowed between the left and the
+  /// right disparity (OpenCV's disp12MaxDiff; -1 = no check). Removes most of the matches that
+  /// straddle an occlusion boundary, whose points would float behind rocks.
+  int max_lr_difference = 1;
   void validate() const;
 };
 

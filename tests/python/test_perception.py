@@ -56,7 +56,12 @@ def test_render_gives_images_and_exact_depth():
 def test_stereo_bm_equals_cv2_on_the_same_pair():
     cam, _, left, right, depth = _pair()
     o = P.StereoMatcherOptions()
+    checked = P.StereoMatcher(o).compute(left, right)
+    o.max_lr_difference = -1  # cv2's StereoBM has no left-right check: compare without ours
     ours = P.StereoMatcher(o).compute(left, right)
+    # the check only removes matches
+    assert np.all(np.isfinite(ours)[np.isfinite(checked)])
+    assert 0.8 * np.isfinite(ours).sum() < np.isfinite(checked).sum() < np.isfinite(ours).sum()
     bm = cv2.StereoBM_create(numDisparities=o.num_disparities, blockSize=o.block_size)
     bm.setUniquenessRatio(o.uniqueness_ratio)
     bm.setTextureThreshold(o.texture_threshold)
