@@ -187,7 +187,10 @@ FuseStats ElevationMap::fuse_points(const Eigen::Ref<const Points>& points,
     }
     const double innovation = meas - h, sum = var + mvar;
     if (innovation * innovation > thr2 * sum) {
-      variance_[s] = static_cast<float>(var + options_.multi_height_noise);
+      // the disagreement is evidence that the cell's variance is too small by about innovation^2
+      // (matching artefacts at rock edges, or two surfaces in one cell): grow it by that much, so
+      // the cell stays consistent and the next measurement is fused with an honest weight
+      variance_[s] = static_cast<float>(var + std::max(options_.multi_height_noise, innovation * innovation));
       ++stats.gated_cells;
       continue;
     }

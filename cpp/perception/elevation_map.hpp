@@ -29,10 +29,11 @@ struct ElevationMapOptions {
   double disparity_sigma = 0.3;
   double pose_variance = 0.0;      ///< extra height variance per measurement (odometry) [m^2]
   /// Innovation gate in standard deviations: a measurement further from the cell's estimate is
-  /// not fused (another surface in the cell, or a mismatch) but inflates the cell's variance by
-  /// multi_height_noise, so a lasting change wins after a few frames ([17] §IV).
+  /// not fused (another surface in the cell, or a mismatch); as [17]'s multi-height handling it
+  /// inflates the cell's variance instead, here by max(multi_height_noise, innovation^2), so the
+  /// cell's variance stays consistent with what was seen and a lasting change wins next frame.
   double mahalanobis_threshold = 3.0;
-  double multi_height_noise = 1e-4;  ///< [m^2]
+  double multi_height_noise = 1e-4;  ///< smallest inflation [m^2]
   double min_variance = 1e-8;        ///< floor of a cell's variance [m^2]
   void validate() const;
 };

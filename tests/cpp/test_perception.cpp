@@ -481,13 +481,18 @@ TEST(PerceptionMap, KalmanUpdateAndGate) {
   ASSERT_TRUE(map.cell(0.05, 0.05, z, v));
   EXPECT_NEAR(z, 1.16, 1e-6);
   EXPECT_NEAR(v, 0.008, 1e-8);
-  // a measurement 10 sigma away is gated: height kept, variance inflated by multi_height_noise
-  p(0, 2) = 1.16 + 10.0 * std::sqrt(0.008 + 1e-4);
+  // a measurement 10 sigma away is gated: height kept, variance inflated by the innovation^2
+  const double innovation = 10.0 * std::sqrt(0.008 + 1e-4);
+  p(0, 2) = 1.16 + innovation;
   var << 1e-4;
   EXPECT_EQ(map.fuse_points(p, var).gated_cells, 1);
   ASSERT_TRUE(map.cell(0.05, 0.05, z, v));
   EXPECT_NEAR(z, 1.16, 1e-6);
-  EXPECT_NEAR(v, 0.008 + o.multi_height_noise, 1e-8);
+  EXPECT_NEAR(v, 0.008 + innovation * innovation, 1e-6);
+  // the same measurement again now passes the gate and pulls the height most of the way
+  EXPECT_EQ(map.fuse_points(p, var).updated_cells, 1);
+  ASSERT_TRUE(map.cell(0.05, 0.05, z, v));
+  EXPECT_GT(z, 1.16 + 0.9 * innovation);
 }
 
 TEST(PerceptionMap, BadInputIsSkippedOrRejected) {
