@@ -73,8 +73,8 @@ class NumpyMap:
         self.h[touched], self.v[touched] = h_out, v_out
 
 
-def env_rate(terrain_source: str, steps: int) -> float:
-    env = E.ErnestEnv("rockfield", terrain_source=terrain_source)
+def env_rate(terrain_source: str, steps: int, stereo=None) -> float:
+    env = E.ErnestEnv("rockfield", terrain_source=terrain_source, stereo=stereo)
     env.reset(seed=0)
     t0 = time.perf_counter()
     for _ in range(steps):
@@ -95,7 +95,9 @@ def main() -> None:
 
     # 1. StereoBM: ours vs cv2, one thread each
     mo = opts.matcher
-    ours = P.StereoMatcher(mo)
+    checked = P.StereoMatcher(mo)  # default: with the left-right check (a second, mirrored match)
+    mo.max_lr_difference = -1
+    ours = P.StereoMatcher(mo)     # the same single StereoBM call as cv2's
     P.set_opencv_threads(1)
     cv2.setNumThreads(1)
     bm = cv2.StereoBM_create(numDisparities=mo.num_disparities, blockSize=mo.block_size)
@@ -105,12 +107,13 @@ def main() -> None:
     bm.setSpeckleRange(mo.speckle_range)
     bm.setPreFilterCap(mo.pre_filter_cap)
     t_ours = median_ms(lambda: ours.compute(left, right), 21)
+    t_checked = median_ms(lambda: checked.compute(left, right), 21)
     t_cv2 = median_ms(lambda: bm.compute(left, right), 21)
     t_cv2_float = median_ms(lambda: bm.compute(left, right).astype(np.float32) / 16.0, 21)
     print(f"StereoBM 640x480, 1 thread: ours {t_ours:.2f} ms (incl. conversion to float px), "
           f"cv2 {t_cv2:.2f} ms raw / {t_cv2_float:.2f} ms with the same conversion "
           f"(ratio ours / cv2 {t_ours / t_cv2_float:.2f}); OpenCV C++ {cv2.__version__} wheel vs "
-          f"Debian's")
+          f"Debian's; ours with the left-right check (default) {t_checked:.2f} ms")
 
     # 2. fusion: C++ vs numpy on the same cloud
     pts, pose = np.ascontiguousarray(fr.points), fr.left_pose
@@ -137,9 +140,12 @@ def main() -> None:
     P.set_opencv_threads(0)
     r_truth = env_rate("truth", 40)
     r_stereo = env_rate("stereo", 40)
-    print(f"ErnestEnv rockfield, policy steps/s: ground truth {r_truth:.1f}, stereo "
-          f"{r_stereo:.1f} (stereo / truth {r_stereo / r_truth:.2f}; a 640x480 frame every 4th "
-          f"step at 0.5 Hz)")
+    small = P.StereoMapperOptions()
+    small.camera.width, small.camera.height = 320, 240
+    r_small = env_rate("stereo", 40, small)
+    print(f"ErnestEnv rockfield, policy steps/s: ground truth {r_truth:.1f}, stereo 640x480 "
+          f"{r_stereo:.1f} (stereo / truth {r_stereo / r_truth:.3f}), stereo 320x240 "
+          f"{r_small:.1f} ({r_small / r_truth:.3f}); a frame every 4th step (0.5 Hz)")
 
 
 if __name__ == "__main__":
