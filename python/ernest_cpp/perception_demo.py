@@ -84,7 +84,9 @@ def plot_frame(path: str, mapper, sampler, position, rotation, k: int, window: f
     X, Y = np.meshgrid(xs[ii], ys[jj], indexing="ij")
     fused = m.heights[np.ix_(ii, jj)]
     truth = mapper.raycaster.surface_heights(X, Y)
-    extent = (ys[jj[-1]], ys[jj[0]], xs[ii[0]], xs[ii[-1]])  # y to the left, x up, as Fig. 11
+    # imshow extent: column j (y) left to right, row i (x) bottom to top; the y axis is then
+    # reversed (y to the left, x up, as Fig. 11)
+    extent = (ys[jj[0]], ys[jj[-1]], xs[ii[0]], xs[ii[-1]])
     lo, hi = np.nanpercentile(truth, 1), np.nanpercentile(truth, 99.5)
 
     fig, ax = plt.subplots(2, 3, figsize=(15, 9.5))
@@ -115,7 +117,7 @@ def plot_frame(path: str, mapper, sampler, position, rotation, k: int, window: f
                 a.scatter(pts[sel, 1], pts[sel, 0], marker=marker, c="tab:blue", s=30, label=label)
         a.legend(loc="lower right", fontsize=7)
     for a in (ax[0, 2], ax[1, 0], ax[1, 1], ax[1, 2]):
-        a.set_xlim(extent[0], extent[1])  # y increasing to the left
+        a.set_xlim(extent[1], extent[0])  # y increasing to the left
         a.set_xlabel("y [m]")
         a.set_ylabel("x [m]")
     fig.tight_layout()
