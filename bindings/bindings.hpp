@@ -12,4 +12,5 @@ void bind_envs(pybind11::module_& m);
 void bind_statics(pybind11::module_& m);
 void bind_statics_rover(pybind11::module_& m);  // part of bind_statics (bindings/statics_rover.cpp)
 void bind_walker(pybind11::module_& m);
+void bind_perception(pybind11::module_& m);
 }  // namespace ernest::bindings

@@ -142,6 +142,9 @@ void bind_envs(py::module_& m) {
       .def_readwrite("fts_noise_force", &EnvOptions::fts_noise_force, "[N]")
       .def_readwrite("fts_noise_torque", &EnvOptions::fts_noise_torque, "[N m]")
       .def_readwrite("start_speed", &EnvOptions::start_speed, "[m/s]")
+      .def_readwrite("terrain_source", &EnvOptions::terrain_source,
+                     "'truth' (default) or 'stereo' (elevation samples from the fused stereo map)")
+      .def_readwrite("stereo", &EnvOptions::stereo, "perception.StereoMapperOptions")
       .def_readwrite("scales", &EnvOptions::scales)
       .def_readwrite("weights", &EnvOptions::weights)
       .def_readwrite("limits", &EnvOptions::limits)
@@ -179,6 +182,11 @@ void bind_envs(py::module_& m) {
         for (int k = 0; k < sensing::kElevationSamples; ++k) p.row(k) = e.sampler().point(k).transpose();
         return p;
       }, "chassis-frame (x, y) of the 12 samples [m]")
+      .def_property_readonly("elevation_source", [](const RoverEnv& e) {
+        return std::vector<int>(e.elevation().source.begin(), e.elevation().source.end());
+      }, "per sample: 0 measured, 1 interpolated, 2 extrapolated, 3 unknown (hole-filling of §4.2)")
+      .def_property_readonly("mapper", &RoverEnv::mapper, py::return_value_policy::reference_internal,
+                             "the episode's perception.StereoMapper (terrain_source 'stereo'), else None")
       .def_property_readonly("fts", &RoverEnv::fts, "last processed force–torque values (4 x 6)")
       .def_property_readonly("fts_bias", &RoverEnv::fts_bias)
       .def_property_readonly("current_action", &RoverEnv::current_action)

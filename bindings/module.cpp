@@ -26,4 +26,7 @@ PYBIND11_MODULE(_core, m) {
   auto walker = m.def_submodule(
       "walker", "ATHLETE-class wheel-on-leg walker: kinematics, IK, joint torques (seed 003)");
   ernest::bindings::bind_walker(walker);
+  auto perception = m.def_submodule(
+      "perception", "Simulated stereo cameras, OpenCV stereo and the elevation map (seed 004 §2.4)");
+  ernest::bindings::bind_perception(perception);
 }

@@ -25,6 +25,9 @@ void EnvOptions::validate() const {
   require_in_range(o, "start_speed", start_speed, 0.0, 0.5);
   require_in_range(o, "eps_slip", eps_slip, -1.0, 1e8);
   require_in_range(o, "eps_motion", eps_motion, -1.0, 1.0);
+  require(terrain_source == "truth" || terrain_source == "stereo",
+          "EnvOptions.terrain_source = '" + terrain_source + "'; allowed: 'truth', 'stereo'");
+  if (terrain_source == "stereo") stereo.validate();
   scales.validate();
   weights.validate();
   limits.validate();
@@ -133,6 +136,12 @@ sensing::ObservationVector RoverEnv::start_episode(std::uint64_t seed) {
   sim_->reset(scenario_->start_x, scenario_->start_y, scenario_->start_heading, 0.0, 0.0,
               options_.start_speed);
   heights_ = std::make_unique<TerrainHeightSource>(scenario_->terrain, scenario_->obstacles);
+  mapper_.reset();
+  if (options_.terrain_source == "stereo") {
+    perception::StereoMapperOptions mo = options_.stereo;
+    mo.render.seed ^= seed;  // texture and sensor noise follow the episode seed (deterministic)
+    mapper_ = std::make_unique<perception::StereoMapper>(scenario_->terrain, scenario_->obstacles, mo);
+  }
   duration_ = options_.episode_duration > 0.0 ? options_.episode_duration
                                               : scenario_->episode_duration;
   noise_rng_.seed(seed ^ 0x9E3779B97F4A7C15ULL);
@@ -225,7 +234,14 @@ StepResult RoverEnv::step(const sensing::ActionVector& action) {
 sensing::ObservationVector RoverEnv::observe() {
   const dynamics::RoverState& st = sim_->state();
   const Eigen::Quaterniond q(st.quaternion[0], st.quaternion[1], st.quaternion[2], st.quaternion[3]);
-  elevation_ = sampler_.sample(st.position, q.toRotationMatrix(), *heights_);
+  const Eigen::Matrix3d rotation = q.toRotationMatrix();
+  if (mapper_) {
+    // the map moves with the rover every step; a frame is fused when the fusion rate says so
+    mapper_->update(metrics_.time, st.position, rotation);
+    elevation_ = sampler_.sample(st.position, rotation, mapper_->map());
+  } else {
+    elevation_ = sampler_.sample(st.position, rotation, *heights_);
+  }
   fts_ = fts_filter_.processed();
   if (options_.fts_noise_force > 0.0 || options_.fts_noise_torque > 0.0) {
     std::normal_distribution<double> nf(0.0, options_.fts_noise_force),

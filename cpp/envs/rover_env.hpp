@@ -12,6 +12,7 @@
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/envs/scenarios.hpp"
 #include "ernest/envs/terrain_source.hpp"
+#include "ernest/perception/stereo_mapper.hpp"
 #include "ernest/sensing/elevation_sampler.hpp"
 #include "ernest/sensing/fts_processor.hpp"
 #include "ernest/sensing/observation.hpp"
@@ -49,6 +50,11 @@ struct EnvOptions {
   /// (0 = none; the training noise of §4.2 is added in the replay buffer instead).
   double fts_noise_force = 0.0, fts_noise_torque = 0.0;
   double start_speed = 0.0;         ///< rolling start [m/s] (see RoverSim::reset)
+  /// Where the 12 elevation samples come from: "truth" (the simulator's terrain and boxes, the
+  /// default) or "stereo": the masthead cameras ray-cast, matched (StereoBM) and fused into the
+  /// robot-centric elevation map at stereo.fusion_rate (seed 004 §2.4), holes and noise included.
+  std::string terrain_source = "truth";
+  perception::StereoMapperOptions stereo{};  ///< used when terrain_source == "stereo"
   sensing::ObservationScales scales{};
   sensing::RewardWeights weights{};
   sensing::ActionLimits limits{};
@@ -108,6 +114,8 @@ class RoverEnv {
   /// Force–torque biases from the jack calibration of §4.2 (wheels hanging, chassis supported).
   const sensing::Wrenches& fts_bias() const { return bias_; }
   const sensing::ElevationSampler& sampler() const { return sampler_; }
+  /// The stereo pipeline of the current episode (terrain_source "stereo"), else nullptr.
+  const perception::StereoMapper* mapper() const { return mapper_.get(); }
   /// Physics steps per policy step.
   int substeps() const { return substeps_; }
 
@@ -123,6 +131,7 @@ class RoverEnv {
   std::unique_ptr<Scenario> scenario_;
   std::unique_ptr<dynamics::RoverSim> sim_;
   std::unique_ptr<TerrainHeightSource> heights_;
+  std::unique_ptr<perception::StereoMapper> mapper_;
   sensing::FtsProcessor fts_filter_;
   sensing::ElevationSampler sampler_;
   sensing::Wrenches bias_ = sensing::Wrenches::Zero();

@@ -35,6 +35,7 @@ void LoopOptions::validate() const {
   elevation.validate();
   limits.validate();
   watchdog.validate();
+  if (stereo_map) stereo.validate();
   require_in_range(o, "telemetry_every", telemetry_every, 1.0, 1e9);
 }
 
@@ -54,6 +55,8 @@ LoopOptions LoopOptions::from_env(const envs::RoverEnv& env) {
   o.elevation = env.sampler().options();
   o.limits.velocity = e.limits;
   o.passive = e.passive;
+  o.stereo_map = e.terrain_source == "stereo";
+  o.stereo = env.mapper() ? env.mapper()->options() : e.stereo;
   return o;
 }
 
@@ -73,6 +76,10 @@ ControlLoop::ControlLoop(RoverInterface& io, Policy& policy, const dynamics::Rov
   sync_every_ = ticks_per(options_.sensor_rate, options_.sync_rate, "sync_rate");
   action_ = sensing::command_to_action(Eigen::Vector3d::Zero(), options_.limits.velocity);  // standing
   out_.gimbal_enabled = out_.clutch_engage = !options_.passive;
+  if (options_.stereo_map) {
+    matcher_ = std::make_unique<perception::StereoMatcher>(options_.stereo.matcher);
+    map_ = std::make_unique<perception::ElevationMap>(options_.stereo.map);
+  }
   logger_ = [](double t, const std::string& m) { std::fprintf(stderr, "[runtime %9.3f s] %s\n", t, m.c_str()); };
 }
 
@@ -83,9 +90,23 @@ void ControlLoop::fault(Fault f, double now, const std::string& why) {
     logger_(now, std::string("watchdog: ") + to_string(f) + ": " + why + " -> zero velocities");
 }
 
+void ControlLoop::update_map(const SensorFrame& f) {
+  // the order of perception::StereoMapper::update: re-centre, then fuse a new pair
+  map_->move_to(f.position.x(), f.position.y());
+  if (!io_.stereo(pair_)) return;
+  const auto& cam = options_.stereo.camera;
+  const perception::FloatImage disparity = matcher_->compute(pair_.left, pair_.right);
+  const perception::PointCloud cloud =
+      perception::disparity_to_points(disparity, cam, 0.5, options_.stereo.max_depth);
+  map_->fuse_cloud(cloud.points, pair_.left_pose, cam);
+  ++stereo_frames_;
+}
+
 sensing::ObservationVector ControlLoop::observe(const SensorFrame& f) const {
+  const sensing::HeightSource& heights = map_ ? static_cast<const sensing::HeightSource&>(*map_)
+                                              : io_.heights();
   const sensing::ElevationSample elev =
-      sampler_.sample(f.position, f.orientation.toRotationMatrix(), io_.heights());
+      sampler_.sample(f.position, f.orientation.toRotationMatrix(), heights);
   sensing::ObservationInputs in;
   in.heading_deviation = path_.heading_deviation(f.yaw);
   in.lateral_deviation = path_.lateral_deviation(f.position.x(), f.position.y());
@@ -119,6 +140,7 @@ void ControlLoop::tick() {
   if (policy_tick && !watchdog_.tripped()) {
     bool ok = true;
     try {
+      if (map_) update_map(f);
       observation_ = observe(f);
     } catch (const std::exception& e) {
       fault(Fault::Observation, now, e.what());

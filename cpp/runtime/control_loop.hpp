@@ -10,9 +10,11 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "ernest/dynamics/rover_parameters.hpp"
+#include "ernest/perception/stereo_mapper.hpp"
 #include "ernest/runtime/policy.hpp"
 #include "ernest/runtime/rover_interface.hpp"
 #include "ernest/runtime/safety.hpp"
@@ -43,6 +45,11 @@ struct LoopOptions {
   WatchdogOptions watchdog{};
   bool passive = false;        ///< gimbal off, clutch open (§5, Table 6)
   int telemetry_every = 8;     ///< ticks per telemetry row (50 Hz at 400 Hz)
+  /// Build the elevation map onboard (§2.4): at each policy tick the map is re-centred on the
+  /// rover, a new RoverInterface::stereo() pair is matched (StereoBM) and fused, and the samples
+  /// read the map. Off: the samples read RoverInterface::heights().
+  bool stereo_map = false;
+  perception::StereoMapperOptions stereo{};  ///< camera, matcher, map (render is unused)
   void validate() const;
   /// The settings an envs::RoverEnv episode uses (rates, scales, sampler, limits, passive), with
   /// `phase` aligned to its physics steps. Joint limiting is left on (the env has none).
@@ -71,6 +78,9 @@ class ControlLoop {
   void run(double duration);
 
   long ticks() const { return ticks_; }
+  /// The onboard elevation map (stereo_map), else nullptr.
+  const perception::ElevationMap* map() const { return map_.get(); }
+  long stereo_frames() const { return stereo_frames_; }
   long policy_steps() const { return policy_steps_; }
   /// The action in force (normalised, what the next observation reports) and the command sent.
   const sensing::ActionVector& action() const { return action_; }
@@ -106,6 +116,11 @@ class ControlLoop {
   ActuatorCommand out_{};
   sensing::ObservationVector observation_ = sensing::ObservationVector::Zero();
   double expected_progress_ = 0.0, busy_ = 0.0;
+  std::unique_ptr<perception::StereoMatcher> matcher_;
+  std::unique_ptr<perception::ElevationMap> map_;
+  StereoPair pair_;
+  long stereo_frames_ = 0;
+  void update_map(const SensorFrame& f);
 };
 
 }  // namespace ernest::runtime

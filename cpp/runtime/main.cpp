@@ -1,6 +1,8 @@
 // ernest_runtime: the onboard runtime against the C++ simulator, no Python (seed 004 §5).
 //   ernest_runtime --policy FILE --scenario NAME --seed N --duration S [--telemetry out.csv]
 //                  [--mode env|onboard] [--soil NAME] [--passive] [--actions out.csv] [--quiet]
+//                  [--terrain-source truth|stereo]   (stereo: elevation samples from the map the
+//                  loop fuses from ray-cast stereo pairs, seed 004 §2.4)
 //   ernest_runtime --policy FILE --replay observations.csv --actions out.csv
 // (--replay: run the policy on logged normalised observations, one row of 45 per line, and write
 // the actions; the open-loop check of "same observations, same actions".)
@@ -42,6 +44,7 @@ void usage(std::FILE* out) {
                "usage: ernest_runtime --policy FILE --scenario NAME --seed N --duration S\n"
                "                      [--telemetry out.csv] [--actions out.csv] [--mode env|onboard]\n"
                "                      [--soil m90|dry_sand|wet_sand] [--passive] [--quiet]\n"
+               "                      [--terrain-source truth|stereo]\n"
                "       ernest_runtime --policy FILE --replay observations.csv --actions out.csv\n"
                "scenarios:");
   for (const auto& n : ernest::envs::scenario_names()) std::fprintf(out, " %s", n.c_str());
@@ -52,7 +55,8 @@ void usage(std::FILE* out) {
 
 int main(int argc, char** argv) {
   using namespace ernest;
-  std::string policy_path, scenario, telemetry_path, actions_path, replay_path, mode = "env", soil = "m90";
+  std::string policy_path, scenario, telemetry_path, actions_path, replay_path, mode = "env", soil = "m90",
+              terrain_source = "truth";
   long long seed = -1;
   double duration = -1.0;
   bool passive = false, quiet = false;
@@ -75,6 +79,7 @@ int main(int argc, char** argv) {
       else if (a == "--replay") replay_path = value("--replay");
       else if (a == "--mode") mode = value("--mode");
       else if (a == "--soil") soil = value("--soil");
+      else if (a == "--terrain-source") terrain_source = value("--terrain-source");
       else if (a == "--passive") passive = true;
       else if (a == "--quiet") quiet = true;
       else if (a == "-h" || a == "--help") { usage(stdout); return 0; }
@@ -135,6 +140,7 @@ int main(int argc, char** argv) {
     envs::EnvOptions eo;
     eo.scenario.kind = envs::scenario_kind(scenario);
     eo.soil = soil;
+    eo.terrain_source = terrain_source;
     eo.passive = passive;
     eo.episode_duration = duration;
     envs::RoverEnv env(dynamics::RoverParameters{}, eo);

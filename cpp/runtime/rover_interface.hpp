@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <array>
 
+#include "ernest/perception/raycaster.hpp"
 #include "ernest/sensing/elevation_sampler.hpp"
 #include "ernest/sensing/fts_processor.hpp"
 #include "ernest/sensing/path_reward.hpp"
@@ -41,6 +42,14 @@ struct ActuatorCommand {
   bool clutch_engage = true;    ///< roll clutch request (§2.2)
 };
 
+/// One rectified stereo pair of the masthead cameras (§2.1.2) and the left camera's pose
+/// (camera -> world, from the odometry) when it was taken.
+struct StereoPair {
+  double stamp = 0.0;  ///< [s]
+  perception::GrayImage left, right;
+  Eigen::Isometry3d left_pose = Eigen::Isometry3d::Identity();
+};
+
 class RoverInterface {
  public:
   virtual ~RoverInterface() = default;
@@ -52,8 +61,12 @@ class RoverInterface {
   virtual void command(const ActuatorCommand& command) = 0;
   /// Block until the next sensor tick (hardware: the bus cycle; simulator: advance the physics).
   virtual void wait_next_tick() = 0;
-  /// The terrain heights the elevation samples read (onboard: the stereo elevation map, §2.4).
+  /// The terrain heights the elevation samples read when the loop builds no map itself.
   virtual const sensing::HeightSource& heights() const = 0;
+  /// A new stereo pair since the last call, or false (the default: no cameras). With
+  /// LoopOptions::stereo_map the loop matches and fuses the pairs into its own elevation map
+  /// (§2.4) and samples that instead of heights().
+  virtual bool stereo(StereoPair& /*out*/) { return false; }
 };
 
 }  // namespace ernest::runtime

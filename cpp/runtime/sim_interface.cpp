@@ -22,6 +22,34 @@ SimRoverInterface::SimRoverInterface(envs::RoverEnv& env, double sensor_rate)
       rate_(sensor_rate),
       t0_(env.sim().state().time) {
   init();
+  if (env.mapper()) {
+    stereo_options_ = env.mapper()->options();  // render seed already follows the episode seed
+    raycaster_ = std::make_unique<perception::Raycaster>(env.scenario().terrain,
+                                                         env.scenario().obstacles,
+                                                         stereo_options_.render);
+  }
+}
+
+bool SimRoverInterface::stereo(StereoPair& out) {
+  if (!raycaster_) return false;
+  // the schedule of perception::StereoMapper::update, on the simulator's clock
+  const dynamics::RoverState& s = sim_.state();
+  const double time = s.time - t0_;
+  if (stereo_frames_ > 0 && time - last_stereo_ < 1.0 / stereo_options_.fusion_rate - 1e-9) return false;
+  const Eigen::Vector3d position = s.position;
+  const Eigen::Matrix3d rotation =
+      Eigen::Quaterniond(s.quaternion[0], s.quaternion[1], s.quaternion[2], s.quaternion[3])
+          .toRotationMatrix();
+  const auto& cam = stereo_options_.camera;
+  out.stamp = s.time;
+  out.left_pose = cam.camera_pose(position, rotation, 0);
+  perception::FloatImage depth;
+  raycaster_->render(out.left_pose, cam, 2 * stereo_frames_, out.left, depth);
+  raycaster_->render(cam.camera_pose(position, rotation, 1), cam, 2 * stereo_frames_ + 1, out.right,
+                     depth);
+  last_stereo_ = time;
+  ++stereo_frames_;
+  return true;
 }
 
 void SimRoverInterface::init() {

@@ -8,6 +8,7 @@
 
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/envs/rover_env.hpp"
+#include "ernest/perception/stereo_mapper.hpp"
 #include "ernest/runtime/rover_interface.hpp"
 
 namespace ernest::runtime {
@@ -35,6 +36,9 @@ class SimRoverInterface : public RoverInterface {
   /// fault).
   void wait_next_tick() override;
   const sensing::HeightSource& heights() const override { return *heights_; }
+  /// With an env whose terrain_source is "stereo": the masthead pair ray-cast from the current
+  /// state at the env's fusion rate (same scene, seed and frame numbering as its StereoMapper).
+  bool stereo(StereoPair& out) override;
 
   long ticks() const { return ticks_; }
   int ticks_per_step() const { return ticks_per_step_; }
@@ -49,6 +53,10 @@ class SimRoverInterface : public RoverInterface {
   int ticks_per_step_;
   long ticks_ = 0;
   SensorFrame frame_{};
+  std::unique_ptr<perception::Raycaster> raycaster_;  // stereo cameras (env with stereo)
+  perception::StereoMapperOptions stereo_options_{};
+  std::uint64_t stereo_frames_ = 0;
+  double last_stereo_ = 0.0;
 };
 
 }  // namespace ernest::runtime

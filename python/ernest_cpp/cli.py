@@ -5,12 +5,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import evaluate, reproduce, rover_statics, slope_demo, soil_curves, transitions, walker_demo
+from . import (evaluate, perception_demo, reproduce, rover_statics, slope_demo, soil_curves,
+               transitions, walker_demo)
 from .rl import commands as rl_commands
 
 # Each module exposes add_parser(subparsers) and sets `func` on its parser.
 _COMMANDS = [soil_curves, evaluate, rl_commands, transitions, slope_demo, reproduce,
-             rover_statics, walker_demo]
+             rover_statics, walker_demo, perception_demo]
 
 
 def main(argv: list[str] | None = None) -> int:

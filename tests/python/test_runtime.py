@@ -68,11 +68,11 @@ def one_thread():
     torch.set_num_threads(old)
 
 
-def python_episode(policy, scenario: str, seed: int, duration: float):
+def python_episode(policy, scenario: str, seed: int, duration: float, terrain_source="truth"):
     """The Python path: ErnestEnv, physical observation -> policy (torch, float32) -> physical
     command -> sensing.command_to_action -> env.step, until the episode ends. Returns the actions,
     the normalised observations they were computed from, the metrics and the last info."""
-    env = ErnestEnv(scenario, episode_length=duration)
+    env = ErnestEnv(scenario, episode_length=duration, terrain_source=terrain_source)
     scale = np.asarray(env.options.scales.divisors())
     obs, _ = env.reset(seed=seed)
     actions, observations = [], []
@@ -87,11 +87,12 @@ def python_episode(policy, scenario: str, seed: int, duration: float):
             return np.array(actions), np.array(observations), env.metrics, info
 
 
-def cpp_episode(path, scenario, seed, duration, tmp_path, mode="env"):
+def cpp_episode(path, scenario, seed, duration, tmp_path, mode="env", terrain_source="truth"):
     out = tmp_path / f"actions_{scenario}_{seed}_{mode}.csv"
     tel = tmp_path / f"telemetry_{scenario}_{seed}_{mode}.csv"
     r = run_runtime("--policy", path, "--scenario", scenario, "--seed", str(seed), "--duration",
-                    str(duration), "--actions", str(out), "--telemetry", str(tel), "--mode", mode)
+                    str(duration), "--actions", str(out), "--telemetry", str(tel), "--mode", mode,
+                    "--terrain-source", terrain_source)
     assert r.returncode == 0, r.stdout + r.stderr
     return np.loadtxt(out, delimiter=",", skiprows=1)[:, 1:], r.stdout, tel
 
@@ -123,6 +124,24 @@ def test_parity_python_actor_vs_cpp_runtime_whole_episode(exported, tmp_path, on
     rows = np.genfromtxt(tel, delimiter=",", names=True)
     assert len(rows) == len(py)
     np.testing.assert_allclose(rows["action_vx"], cpp[:, 0], atol=1e-12)
+
+
+def test_parity_with_stereo_elevation_map(exported, tmp_path, one_thread):
+    # terrain_source="stereo": the elevation samples come from the map fused from ray-cast
+    # StereoBM pairs (seed 004 §2.4); the C++ runtime (no Python) makes the Python path's decisions.
+    actor, lay, path = exported
+    python_actor = ExportedPolicy(actor, lay, L.POLICY_RATE_HZ).eval()
+    py, obs, _, _ = python_episode(python_actor, "rockfield", 3, 5.0, terrain_source="stereo")
+    truth, truth_obs, _, _ = python_episode(python_actor, "rockfield", 3, 5.0)
+    cpp, _, _ = cpp_episode(path, "rockfield", 3, 5.0, tmp_path, terrain_source="stereo")
+    assert py.shape == cpp.shape == (10, 3)
+    np.testing.assert_allclose(cpp, py, rtol=0, atol=1e-5)
+    elev = slice(sensing.OBSERVATION_INDEX["elevation"], sensing.OBSERVATION_INDEX["elevation"] + 12)
+    assert not np.allclose(obs[:, elev], truth_obs[:, elev])  # the map is what the policy saw
+    # the onboard 400 Hz loop fuses its own map from the interface's stereo pairs
+    onboard, _, _ = cpp_episode(path, "rockfield", 3, 5.0, tmp_path, mode="onboard",
+                                terrain_source="stereo")
+    assert onboard.shape == (10, 3) and np.all(np.isfinite(onboard))
 
 
 def test_parity_python_torchscript_module_vs_cpp_runtime(exported, tmp_path, one_thread):
