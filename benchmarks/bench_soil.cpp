@@ -11,11 +11,14 @@
 #include <thread>
 #include <vector>
 
+#include "bench_util.hpp"
 #include "ernest/soil/bekker_wong.hpp"
 #include "reference_bekker_wong.hpp"
 
 using namespace ernest::soil;
-using Clock = std::chrono::steady_clock;
+using ernest::bench::Clock;
+using ernest::bench::cpu_model;
+using ernest::bench::median_us;
 
 namespace {
 using States = Eigen::Matrix<double, Eigen::Dynamic, 5, Eigen::RowMajor>;
@@ -30,26 +33,6 @@ States make_states(int n, unsigned seed) {
   return s;
 }
 
-template <class F>
-double median_us_per_wheel(F&& run, int wheels, int repeats) {
-  std::vector<double> t;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = Clock::now();
-    run();
-    t.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() / wheels);
-  }
-  std::nth_element(t.begin(), t.begin() + t.size() / 2, t.end());
-  return t[t.size() / 2];
-}
-
-std::string cpu_model() {
-  std::ifstream f("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(f, line)) {
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  }
-  return "unknown";
-}
 }  // namespace
 
 int main() {
@@ -70,7 +53,7 @@ int main() {
   // Same-run baseline: the plain scalar formulation (std:: maths, one node at a time) at the
   // default number of nodes, i.e. what a straightforward implementation would cost.
   const int kRef = 1024;
-  const double ref_us = median_us_per_wheel(
+  const double ref_us = median_us(
       [&] {
         for (int i = 0; i < kRef; ++i) {
           const auto f = reference::evaluate(soil, wheel,
@@ -88,7 +71,7 @@ int main() {
               "median relerr", "max relerr", "naive/ours");
   for (int n : {2, 3, 4, 5, 6, 8, 12, 16}) {
     const BekkerWongModel m(soil, wheel, n);
-    const double single_us = median_us_per_wheel(
+    const double single_us = median_us(
         [&] {
           for (int i = 0; i < kWheels; ++i) {
             const WheelSoilForce f = m.evaluate(
@@ -97,7 +80,7 @@ int main() {
           }
         },
         kWheels, 21);
-    const double batch_us = median_us_per_wheel([&] { m.evaluate_batch(states, forces); },
+    const double batch_us = median_us([&] { m.evaluate_batch(states, forces); },
                                                 kWheels, 21);
     m.evaluate_batch(states, forces);
     std::vector<double> err(kWheels);

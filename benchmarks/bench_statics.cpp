@@ -21,38 +21,20 @@
 
 #include <Eigen/Dense>
 
+#include "bench_util.hpp"
 #include "ernest/statics/force_distribution.hpp"
 #include "ernest/statics/sag.hpp"
 #include "ernest/statics/stability.hpp"
 
 using namespace ernest::statics;
-using Clock = std::chrono::steady_clock;
+using ernest::bench::Clock;
+using ernest::bench::cpu_model;
+using ernest::bench::median_us;
 namespace bg = boost::geometry;
 using BPoint = bg::model::d2::point_xy<double>;
 using BPolygon = bg::model::polygon<BPoint>;
 
 namespace {
-
-template <class F>
-double median_us(F&& run, int calls, int repeats) {
-  std::vector<double> t;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = Clock::now();
-    run();
-    t.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() / calls);
-  }
-  std::nth_element(t.begin(), t.begin() + t.size() / 2, t.end());
-  return t[t.size() / 2];
-}
-
-std::string cpu_model() {
-  std::ifstream f("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(f, line)) {
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  }
-  return "unknown";
-}
 
 // Perturbed hexagons of radius 2.5 m on uneven ground, CG near the centre 1.75 m up.
 std::vector<Eigen::Matrix3Xd> stances(int n, unsigned seed, std::vector<Eigen::Vector3d>& cgs) {

@@ -10,24 +10,13 @@
 #include <random>
 #include <vector>
 
+#include "bench_util.hpp"
 #include "ernest/walker/leg_ik.hpp"
 
 using namespace ernest::walker;
-using Clock = std::chrono::steady_clock;
-
-namespace {
-template <class F>
-double median_us(F&& run, int per, int repeats) {
-  std::vector<double> t;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = Clock::now();
-    run();
-    t.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() / per);
-  }
-  std::nth_element(t.begin(), t.begin() + t.size() / 2, t.end());
-  return t[t.size() / 2];
-}
-}  // namespace
+using ernest::bench::Clock;
+using ernest::bench::cpu_model;
+using ernest::bench::median_us;
 
 int main() {
   const WalkerModel model(sdm_b_parameters());
