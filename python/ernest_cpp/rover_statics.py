@@ -2,9 +2,10 @@
 command. The computations are C++ (``ernest_cpp.statics``); this module runs them over sweeps and
 episodes, writes the reports and draws the plots.
 
-``ernest statics --out DIR`` runs the steps of :data:`STEPS` in order; each step is a function
-``step(args, out_dir) -> list[str]`` returning Markdown lines for ``DIR/report.md``. Other statics
-(FootFall: stability, sag, weight distribution, sway gait) add their steps to that list.
+``ernest statics --out DIR`` runs the steps of :data:`STEPS` in order (``--steps a,b`` a subset);
+each step is a function ``step(args, out_dir) -> list[str]`` returning Markdown lines for
+``DIR/report.md`` and writing its PNG. FootFall's steps (seed 003 on the SDM-B model: stability
+map, sag, weight distribution, sway gait) live in ``walker_statics`` and ``walker_demo``.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import numpy as np
 
 from . import dynamics as D
 from . import statics as S
+from . import walker_demo, walker_statics
 
 SLOPE_DEG = 20.0  # Fig. 25's slope
 NAMES = ("m_c [kg]", "m_b [kg]", "x_c [m]", "y_c [m]", "z_c [m]", "z_b [m]")
@@ -274,20 +276,29 @@ def step_liftoff(args: argparse.Namespace, out_dir: str) -> list[str]:
 
 
 #: The steps of ``ernest statics``, in order: (name, function(args, out_dir) -> report lines).
-STEPS = [("liftoff", step_liftoff), ("mass-model", step_mass_model)]
+#: The first four are FootFall's (seed 003, SDM-B model); the last two ERNEST's (seed 004).
+STEPS = [("stability", walker_statics.step_stability), ("sag", walker_statics.step_sag),
+         ("weight-distribution", walker_demo.step_weight_distribution),
+         ("sway-gait", walker_demo.step_sway_gait),
+         ("liftoff", step_liftoff), ("mass-model", step_mass_model)]
 
 
 def main_args(args: argparse.Namespace) -> int:
     names = [s.strip() for s in args.steps.split(",") if s.strip()] if args.steps else \
         [n for n, _ in STEPS]
     known = dict(STEPS)
+    if not names:
+        raise ValueError(f"--steps names no step (steps: {', '.join(known)})")
     for n in names:
         if n not in known:
             raise ValueError(f"unknown step {n!r} (steps: {', '.join(known)})")
     if not (args.noise >= 0 and math.isfinite(args.noise)):
         raise ValueError(f"--noise must be >= 0, got {args.noise}")
+    if not (args.stride > 0 and math.isfinite(args.stride)):
+        raise ValueError(f"--stride must be > 0, got {args.stride}")
     os.makedirs(args.out, exist_ok=True)
-    lines = ["# Statics", ""]
+    lines = ["# Statics", "", "Seed 003 (FootFall, ATHLETE SDM-B model) and seed 004 (ERNEST); "
+             "steps: " + ", ".join(names) + ".", ""]
     for n in names:
         print(f"ernest statics: {n}", flush=True)
         lines += known[n](args, args.out)
@@ -299,8 +310,9 @@ def main_args(args: argparse.Namespace) -> int:
 
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser("statics", help="statics: lift-off roll torque (seed 004 Fig. 25), "
-                              "mass-model fit (eq 11)", description=__doc__)
+    p = subparsers.add_parser("statics", help="statics: stability map, sag (seed 003 Fig. 11), "
+                              "legs lifted (Fig. 16), sway gait (Fig. 15), lift-off roll torque "
+                              "(seed 004 Fig. 25), mass-model fit (eq 11)", description=__doc__)
     p.add_argument("--out", default="out/statics", help="output folder (default out/statics)")
     p.add_argument("--steps", default="",
                    help=f"comma-separated steps (default all: {', '.join(n for n, _ in STEPS)})")
@@ -311,4 +323,6 @@ def add_parser(subparsers) -> None:
                    help="seconds of the policy's SlopeEval-v0 episode (default: the env's 60)")
     p.add_argument("--noise", type=float, default=10.0,
                    help="noise [N] on the loads of the noisy mass-model fit (default 10)")
+    p.add_argument("--stride", type=float, default=0.5,
+                   help="foot advance per cycle of the sway gait [m] (default 0.5)")
     p.set_defaults(func=main_args)

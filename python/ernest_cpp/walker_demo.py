@@ -118,6 +118,7 @@ def weight_distribution(out: Path) -> tuple[list[str], dict]:
         "The hip pitch torque limit is calibrated so that the one-leg case reads about 50 % (the "
         "paper's only torque figure); the two-leg value is then the model's prediction. The paper's "
         f"finding (mean force higher, max force and max torque lower) holds: {'yes' if holds else 'NO'}.", "",
+        "![fig16](fig16_lifted_legs.png)", "",
     ]
     lines += pose_sweep()
     return lines, {"one": one, "two": two}
@@ -185,6 +186,7 @@ def sway_gait(out: Path, stride: float = 0.5) -> tuple[list[str], W.SwayGaitResu
         f"{result.reference_margin:.3f} → {result.sway_margin:.3f} "
         f"({100 * result.improvement:.0f} % larger; paper: over {100 * PAPER_SWAY_IMPROVEMENT:.0f} %). "
         f"SLSQP: {result.evaluations} evaluations, {result.seconds:.2f} s.", "",
+        "![fig15](fig15_sway_gait.png)", "",
     ]
     return lines, result
 

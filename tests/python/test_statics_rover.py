@@ -93,8 +93,8 @@ def test_liftoff_sweep_mirrors_in_psi_and_matches_the_flat_closed_form():
 def test_statics_command_writes_the_liftoff_plot_and_the_fit_report(tmp_path):
     out = tmp_path / "statics"
     policy = os.path.join(ROOT, "policies", "ernest_default.pt")
-    assert cli_main(["statics", "--out", str(out), "--policy", policy,
-                     "--episode-length", "3"]) == 0
+    assert cli_main(["statics", "--out", str(out), "--policy", policy, "--episode-length", "3",
+                     "--steps", "liftoff,mass-model"]) == 0  # all six: test_statics_cli.py
     assert (out / "liftoff_torque.png").stat().st_size > 10_000
     assert (out / "mass_model_fit.png").stat().st_size > 10_000
     report = (out / "report.md").read_text()
