@@ -10,20 +10,11 @@ repeats, stepping loops in C in both) and our per-step time over MuJoCo's.
 import platform
 import statistics
 import sys
-import time
 
 import numpy as np
 
 from ernest_cpp import dynamics as D
-
-
-def median_us(fn, steps, repeats=9):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - t0) * 1e6 / steps)
-    return statistics.median(times)
+from bench_util import median_us
 
 
 def mjcf(p: D.RoverParameters, dt: float) -> str:

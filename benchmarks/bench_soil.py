@@ -6,21 +6,15 @@ Reference in the same run: the C++ cost is what evaluate_batch approaches as the
 """
 
 import platform
-import statistics
-import time
 
 import numpy as np
 
 from ernest_cpp import soil as S
+from functools import partial
 
+import bench_util
 
-def median_us(fn, per, repeats=15):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - t0) * 1e6 / per)
-    return statistics.median(times)
+median_us = partial(bench_util.median_us, repeats=15)
 
 
 def main():

@@ -13,12 +13,11 @@ repeats, microseconds per call, six contacts):
 """
 
 import platform
-import statistics
-import time
 
 import numpy as np
 
 from ernest_cpp import statics as S
+from bench_util import median_us
 
 try:
     import scipy.optimize
@@ -27,15 +26,6 @@ except ImportError:  # benchmark-only extra
     scipy = None
 
 G = np.array([0.0, 0.0, -9.81])
-
-
-def median_us(fn, per, repeats=9):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - t0) * 1e6 / per)
-    return statistics.median(times)
 
 
 def stances(n, seed=7):

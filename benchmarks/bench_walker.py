@@ -11,22 +11,16 @@ least_squares(method="lm")), the same targets and seed (scipy stops on its relat
 
 import math
 import platform
-import statistics
-import time
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from ernest_cpp import walker as W
+from functools import partial
 
+import bench_util
 
-def median_us(fn, per, repeats=7):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - t0) * 1e6 / per)
-    return statistics.median(times)
+median_us = partial(bench_util.median_us, repeats=7)
 
 
 class NumpyLeg:
