@@ -3,6 +3,7 @@
 Subpackages mirror the C++ tree: ``ernest_cpp.soil`` wraps ``cpp/soil``.
 """
 
+from . import _pickle  # noqa: F401  (pickle/deepcopy of the bound option structs)
 from . import dynamics, opt, rl, sensing, soil, statics, walker
 
 __all__ = ["dynamics", "opt", "rl", "sensing", "soil", "statics", "walker"]

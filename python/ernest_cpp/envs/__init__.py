@@ -7,6 +7,11 @@ Registered ids (kwargs of ``gymnasium.make`` go to :class:`ErnestEnv`)::
     ernest/Flat-v0
 
 ``make_vec(id, num_envs)`` gives the C++-backed vector environment.
+
+From code that has not imported this package: ``gym.make("ernest_cpp.envs:ernest/Slope-v0")``
+(Gymnasium imports the module before the id). Gymnasium 1.x no longer loads the
+``gymnasium.envs`` entry point of pyproject.toml, so a bare ``gym.make("ernest/Slope-v0")`` needs
+``import ernest_cpp.envs`` first.
 """
 
 import gymnasium as gym
@@ -28,7 +33,8 @@ ENV_IDS = {
 
 
 def register_envs() -> None:
-    """Register the ids above (idempotent; also run by gymnasium's plugin entry point)."""
+    """Register the ids above (idempotent). Runs on import of this module; gymnasium < 1.0 also
+    runs it through the plugin entry point, gymnasium 1.x does not (see the module docstring)."""
     for env_id, scenario in ENV_IDS.items():
         if env_id not in gym.registry:
             gym.register(id=env_id, entry_point="ernest_cpp.envs.core:ErnestEnv",

@@ -77,6 +77,23 @@ def observation_layout(options: _envs.EnvOptions):
                                L.paper_noise_groups())
 
 
+#: ``reset(options=...)`` keys the environments honour: none (an episode is set by the gym.make
+#: kwargs and the seed). Any other key is refused rather than silently ignored.
+RESET_OPTIONS: tuple[str, ...] = ()
+
+
+def check_reset_options(options: dict | None) -> None:
+    if options is None:
+        return
+    if not isinstance(options, dict):
+        raise ValueError(f"reset options must be a dict or None, got {type(options).__name__}")
+    unknown = sorted(str(k) for k in options if k not in RESET_OPTIONS)
+    if unknown:
+        raise ValueError(f"reset(options=...): unknown key(s) {', '.join(unknown)}; the ERNEST "
+                         f"environments take no reset options (configure an episode with the "
+                         f"gym.make keyword arguments and the seed)")
+
+
 class ErnestEnv(gym.Env):
     """ERNEST on one of the seed 004 scenarios (§4.5) or evaluation courses (§5).
 
@@ -85,17 +102,24 @@ class ErnestEnv(gym.Env):
     [0, 0.2] m/s, yaw rate +-20 deg/s, roll rate +-10 deg/s, applied for 0.5 s (2 Hz). Reward:
     eq 38 with its terms in ``info``. Episodes end at the end of the map (terminated) or at the
     time limit (truncated); a diverged simulation ends the episode with ``info["diverged"]``.
+
+    Copies (``pickle``, ``copy.deepcopy``) carry the configuration (options, rover parameters,
+    render mode), not the C++ episode in progress: a copy starts unreset, call ``reset()``.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
 
     def __init__(self, scenario: str = "rockfield", render_mode: str | None = None,
-                 params: Any = None, **kwargs):
+                 params: Any = None, _options: Any = None, **kwargs):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode = {render_mode!r}; allowed: None, 'rgb_array'")
         self.render_mode = render_mode
         self.scenario_name = scenario
-        self.options = make_options(scenario, **kwargs)
+        if _options is not None:  # an unpickled copy: the original's validated options
+            _options.validate()
+            self.options = _options
+        else:
+            self.options = make_options(scenario, **kwargs)
         self.params = params if params is not None else _dyn.RoverParameters()
         self.core = _envs.RoverEnv(self.params, self.options)
         clip = sensing.OBSERVATION_CLIP
@@ -106,6 +130,7 @@ class ErnestEnv(gym.Env):
         self.history: list[dict] = []  # per-step ground truth for plots (cleared at reset)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        check_reset_options(options)
         super().reset(seed=seed)
         if seed is not None:
             obs = self.core.reset(int(seed))
@@ -118,7 +143,17 @@ class ErnestEnv(gym.Env):
         return obs.astype(np.float32), {"episode_seed": self.core.episode_seed,
                                         "scenario": self.core.scenario.name}
 
+    def __getstate__(self):
+        return {"scenario_name": self.scenario_name, "render_mode": self.render_mode,
+                "options": self.options, "params": self.params}
+
+    def __setstate__(self, state):
+        self.__init__(state["scenario_name"], state["render_mode"], state["params"],
+                      _options=state["options"])
+
     def step(self, action):
+        if not self._started:
+            raise RuntimeError("ErnestEnv.step: call reset() first")
         a = np.asarray(action, dtype=np.float64).reshape(-1)
         if a.shape != (sensing.ACTION_SIZE,):
             raise ValueError(f"action must have 3 values, got shape {np.shape(action)}")

@@ -10,7 +10,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from .._core import envs as _envs
-from .core import ErnestEnv
+from .core import ErnestEnv, check_reset_options
 
 
 class ErnestVectorEnv(gym.vector.VectorEnv):
@@ -37,8 +37,10 @@ class ErnestVectorEnv(gym.vector.VectorEnv):
         threads = num_threads if num_threads is not None else min(num_envs, os.cpu_count() or 1)
         self.core = _envs.VecRoverEnv(template.params, template.options, num_envs, threads)
         self.render_mode = None
+        self._started = False
 
     def reset(self, *, seed=None, options=None):
+        check_reset_options(options)
         if seed is None:
             rng = np.random.default_rng()
             seeds = [int(s) for s in rng.integers(0, 2**63 - 1, self.num_envs)]
@@ -49,9 +51,12 @@ class ErnestVectorEnv(gym.vector.VectorEnv):
             if len(seeds) != self.num_envs:
                 raise ValueError(f"need {self.num_envs} seeds, got {len(seeds)}")
         obs = self.core.reset(seeds)
+        self._started = True
         return obs.astype(np.float32), {}
 
     def step(self, actions):
+        if not self._started:  # like the single env, instead of an implicit autoreset
+            raise RuntimeError("ErnestVectorEnv.step: call reset() first")
         a = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
         if a.shape[1] != 3:
             raise ValueError(f"actions must be ({self.num_envs}, 3), got {np.shape(actions)}")
