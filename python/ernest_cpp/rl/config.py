@@ -70,8 +70,16 @@ def build_config(preset: str = "quick", yaml_file: str | None = None,
                  overrides: list[str] | None = None) -> dict:
     cfg = load_preset(preset)
     if yaml_file:
-        with open(yaml_file) as fh:
-            user = _load_yaml(fh) or {}
+        try:
+            with open(yaml_file) as fh:
+                user = _load_yaml(fh) or {}
+        except OSError as exc:
+            raise ValueError(f"--config {yaml_file}: {exc.strerror or exc}") from None
+        except yaml.YAMLError as exc:
+            where = getattr(exc, "problem_mark", None)
+            at = f" at line {where.line + 1}, column {where.column + 1}" if where else ""
+            raise ValueError(f"--config {yaml_file}: not valid YAML{at} "
+                             f"({getattr(exc, 'problem', None) or type(exc).__name__})") from None
         if not isinstance(user, dict):
             raise ValueError(f"{yaml_file}: expected a mapping of settings")
         cfg = _merge(cfg, user)

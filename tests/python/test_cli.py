@@ -1,0 +1,88 @@
+"""The ``ernest`` command on wrong invocations (issue 18, item 6): one clear line and exit code 2,
+never a traceback; usage of the subcommand that was mistyped; ``--version``; plain-text help."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+import ernest_cpp
+from ernest_cpp import cli
+
+POINT_MASS = "ernest-toy/PointMass-v0"
+
+
+def _one_line_error(capsys, *parts: str) -> str:
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    for p in parts:
+        assert p in err, err
+    return err
+
+
+def test_missing_config_file(capsys):
+    assert cli.main(["train", "--env", POINT_MASS, "--config", "/missing.yaml"]) == 2
+    _one_line_error(capsys, "ernest train: error:", "--config /missing.yaml", "No such file")
+
+
+def test_invalid_config_yaml(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("td3: [unclosed\n")
+    assert cli.main(["train", "--env", POINT_MASS, "--config", str(bad)]) == 2
+    _one_line_error(capsys, "not valid YAML")
+
+
+@pytest.mark.parametrize("command", ["evaluate", "soil-curves"])
+def test_output_folder_that_cannot_exist(capsys, command):
+    assert cli.main([command, "--out", "/dev/null/x"]) == 2
+    _one_line_error(capsys, f"ernest {command}: error:", "/dev/null/x", "Not a directory")
+
+
+def test_console_script_exits_2_without_traceback():
+    # the installed entry point, as a user runs it
+    r = subprocess.run([sys.executable, "-c", "import sys; from ernest_cpp.cli import main; "
+                        "sys.exit(main())", "evaluate", "--out", "/dev/null/x"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "/dev/null/x" in r.stderr
+
+
+def test_unknown_option_prints_the_subcommand_usage(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["train", "--bogus"])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("usage: ernest train") and "--steps" in err
+    assert "ernest train: error: unrecognized arguments: --bogus" in err
+
+
+@pytest.mark.parametrize("value", ["-5", "0", "many"])
+def test_steps_must_be_a_positive_whole_number(capsys, value):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["train", "--env", POINT_MASS, "--steps", value])
+    assert e.value.code == 2
+    assert "argument --steps" in capsys.readouterr().err
+
+
+def test_total_steps_from_settings_must_be_positive(tmp_path, capsys):
+    assert cli.main(["train", "--env", POINT_MASS, "--run-dir", str(tmp_path / "r"), "--set",
+                     "total_steps=-5", "--set", "log.progress_bar=false", "--set",
+                     "log.tensorboard=false"]) == 2
+    _one_line_error(capsys, "total_steps = -5")
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out == f"ernest {ernest_cpp.__version__}\n"
+
+
+def test_help_is_plain_text(capsys):
+    parser, sub = cli.build_parser()
+    texts = [parser.format_help()] + [p.format_help() for p in sub.choices.values()]
+    for text in texts:
+        assert "``" not in text and ":class:" not in text and ":func:" not in text
+    assert "ernest COMMAND --help" in texts[0]
