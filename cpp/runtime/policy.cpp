@@ -1,12 +1,16 @@
 #include "ernest/runtime/policy.hpp"
 
 #include <ATen/Parallel.h>
+#include <openssl/evp.h>
 #include <torch/script.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
+#include <map>
 #include <sstream>
 
 #include "ernest/common/validation.hpp"
@@ -23,6 +27,7 @@ const char* to_string(PolicyError::Kind kind) {
     case PolicyError::Kind::InputSize: return "input size";
     case PolicyError::Kind::OutputSize: return "output size";
     case PolicyError::Kind::Inference: return "inference";
+    case PolicyError::Kind::ChecksumMismatch: return "checksum mismatch";
   }
   return "?";
 }
@@ -103,6 +108,34 @@ void compare_vector(const std::string& path, const char* key, const std::vector<
 
 }  // namespace
 
+std::string weights_sha256(const torch::jit::Module& module) {
+  static_assert(std::endian::native == std::endian::little, "the digest hashes little-endian float32");
+  std::map<std::string, at::Tensor> tensors;  // name order, like sorted() in Python
+  for (const auto& p : module.named_parameters(/*recurse=*/true)) tensors[p.name] = p.value;
+  for (const auto& b : module.named_buffers(/*recurse=*/true)) tensors[b.name] = b.value;
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), &EVP_MD_CTX_free);
+  if (!ctx || EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr) != 1)
+    throw std::runtime_error("weights_sha256: OpenSSL SHA-256 unavailable");
+  for (const auto& [name, value] : tensors) {
+    const at::Tensor t = value.detach().to(torch::kCPU, torch::kFloat32).contiguous();
+    std::string head = name + "\n";
+    for (int64_t d = 0; d < t.dim(); ++d) head += (d ? "," : "") + std::to_string(t.size(d));
+    head += "\n";
+    EVP_DigestUpdate(ctx.get(), head.data(), head.size());
+    EVP_DigestUpdate(ctx.get(), t.data_ptr<float>(), static_cast<size_t>(t.numel()) * sizeof(float));
+  }
+  unsigned char md[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  EVP_DigestFinal_ex(ctx.get(), md, &len);
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  for (unsigned int i = 0; i < len; ++i) {
+    out += hex[md[i] >> 4];
+    out += hex[md[i] & 15];
+  }
+  return out;
+}
+
 PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations& expect,
                               const std::string& path) {
   expect.validate();
@@ -161,6 +194,11 @@ PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations&
                  expect.rel_tol);
   compare_vector(path, "action_high", m.action_high,
                  Eigen::Vector3d(l.vx_max, l.yaw_rate_max, l.roll_rate_max), expect.rel_tol);
+  if (const json::Value* h = root.find("weights_sha256")) {
+    if (!h->is_string() || h->string.size() != 64)
+      mismatch(path, "field 'weights_sha256' is not a 64-digit hex string");
+    m.weights_sha256 = h->string;
+  }
   if (const json::Value* names = root.find("observation_names"); names && names->is_array())
     for (const auto& n : names->array)
       if (n.is_string()) m.observation_names.push_back(n.string);
@@ -238,6 +276,18 @@ Policy::Policy(const std::string& path, const PolicyExpectations& expect, const 
     throw PolicyError(PolicyError::Kind::MissingMetadata,
                       path + ": the archive has no " + kMetadataFile + " (export it with `ernest export`)");
   p.meta = check_metadata(text, expect, path);
+  if (p.meta.weights_sha256.empty()) {
+    std::cerr << "warning: " << path << ": no weights_sha256 in its metadata, its weights cannot be "
+              << "checked; add it with `ernest stamp-policy " << path << "`\n";
+  } else {
+    const std::string got = weights_sha256(p.module);
+    if (got != p.meta.weights_sha256)
+      throw PolicyError(PolicyError::Kind::ChecksumMismatch,
+                        path + ": its weights do not match the weights_sha256 in its metadata (file "
+                               "altered or corrupt; got " + got.substr(0, 16) + "..., expected " +
+                               p.meta.weights_sha256.substr(0, 16) + "...)");
+    p.meta.weights_verified = true;
+  }
   p.module.eval();
   p.divisors = expect.scales.divisors();
   {

@@ -4,7 +4,9 @@
 // observation times ObservationScales::divisors()) to a PHYSICAL command (Vx [m/s], yaw rate,
 // roll rate [rad/s]), plus the metadata file `ernest_metadata.json`. Every way of being the wrong
 // file is reported by a PolicyError naming what is wrong; inference never allocates Eigen memory
-// and runs on one intra-op thread in inference mode.
+// and runs on one intra-op thread in inference mode. Integrity: the metadata's `weights_sha256`
+// (SHA-256 of every parameter and buffer, the digest of export.py's weights_sha256) is recomputed
+// on load; a file without it (exported before it existed) loads with a warning on stderr.
 #pragma once
 
 #include <Eigen/Core>
@@ -15,6 +17,10 @@
 #include <vector>
 
 #include "ernest/sensing/observation.hpp"
+
+namespace torch::jit {
+struct Module;
+}
 
 namespace ernest::runtime {
 
@@ -28,6 +34,7 @@ class PolicyError : public std::runtime_error {
     InputSize,        ///< the module does not accept the observation vector
     OutputSize,       ///< the module does not return one command of the expected size
     Inference,        ///< a forward pass failed or returned non-finite values
+    ChecksumMismatch, ///< the weights differ from the metadata's weights_sha256 (altered file)
   };
   PolicyError(Kind kind, const std::string& what) : std::runtime_error(what), kind_(kind) {}
   Kind kind() const { return kind_; }
@@ -65,6 +72,8 @@ struct PolicyMetadata {
   double policy_rate_hz = 0.0;
   std::vector<double> obs_offset, obs_scale, action_low, action_high;
   std::vector<std::string> observation_names;
+  std::string weights_sha256;      ///< hex digest from the metadata; empty if the file has none
+  bool weights_verified = false;   ///< the digest was present and matched the loaded weights
   std::string json;  ///< the raw file
 };
 
@@ -77,6 +86,11 @@ struct LatencyStats {
 /// PolicyError(MissingMetadata) if unparsable, PolicyError(LayoutMismatch) if it disagrees.
 PolicyMetadata check_metadata(const std::string& json_text, const PolicyExpectations& expect,
                               const std::string& path = "<metadata>");
+
+/// SHA-256 (lower-case hex) of a module's parameters and buffers, in name order; per tensor the
+/// dotted name, '\n', the shape as comma-separated integers, '\n', the values as little-endian
+/// float32. The same bytes as python/ernest_cpp/rl/export.py weights_sha256.
+std::string weights_sha256(const torch::jit::Module& module);
 
 class Policy {
  public:

@@ -43,8 +43,9 @@ def controllers(policy_file: str | None):
 
         from . import sensing
 
-        module, _ = load_policy(policy_file)
+        module, meta = load_policy(policy_file)
         scale = np.asarray(sensing.ObservationScales().divisors())
+        check_policy_sizes(module, meta, policy_file)
 
         def learned(obs, env=None):
             # the exported module takes physical observations and returns (Vx, yaw rate, roll rate)
@@ -54,6 +55,31 @@ def controllers(policy_file: str | None):
 
         out[LEARNED] = (learned, False)
     return out
+
+
+def check_policy_sizes(module, meta: dict, path: str) -> None:
+    """Refuse, before any episode runs, a policy whose metadata or module does not map the
+    environments' observation (sensing.OBSERVATION_SIZE values) to one command
+    (sensing.ACTION_SIZE values). Raises ValueError naming the file and the sizes."""
+    import torch
+
+    from . import sensing
+
+    n_obs, n_act = sensing.OBSERVATION_SIZE, sensing.ACTION_SIZE
+    if meta.get("obs_dim") != n_obs or meta.get("act_dim") != n_act:
+        raise ValueError(f"{path}: the policy maps {meta.get('obs_dim')} observation values to "
+                         f"{meta.get('act_dim')} commands, the environments need {n_obs} -> {n_act}")
+    try:
+        with torch.no_grad():
+            out = module(torch.zeros(n_obs, dtype=torch.float32))
+    except Exception as exc:  # TorchScript raises RuntimeError/torch.jit.Error for shape errors
+        msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
+        raise ValueError(f"{path}: the module does not accept a {n_obs}-value observation "
+                         f"({msg})") from None
+    if not isinstance(out, torch.Tensor) or out.numel() != n_act:
+        got = out.numel() if isinstance(out, torch.Tensor) else type(out).__name__
+        raise ValueError(f"{path}: the module returns {got} values for one observation, "
+                         f"expected {n_act} (Vx, yaw rate, roll rate)")
 
 
 def run_episode(env_id: str, kwargs: dict, policy, passive: bool, seed: int):

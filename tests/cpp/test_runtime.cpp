@@ -169,6 +169,34 @@ TEST(PolicyLoad, MissingOrInvalidMetadata) {
   EXPECT_TRUE(contains(msg, "not valid JSON")) << msg;
 }
 
+// The weights digest (issue 18): the known answer for one float32 buffer c = (0.1, 0.2, 0.3) is
+// sha256("c\n3\n" + its 12 little-endian bytes), computed with Python's hashlib; a file whose
+// weights differ from its metadata's digest is refused, one without a digest loads (warning).
+TEST(PolicyLoad, WeightsChecksum) {
+  const std::string src = "def forward(self, x):\n  return self.c + 0.0 * x[0:3]\n";
+  const std::string known = "06bdb1e753abcc68a8548dfa26a17aba4cdde8d42e31087c1d4771de208c628f";
+  const torch::Tensor c = torch::tensor({0.1f, 0.2f, 0.3f});
+  const std::string meta = metadata_json("weights_sha256", "\"" + known + "\"");
+  const std::string good = save_module("hashed", src, {{"c", c}}, &meta);
+  EXPECT_EQ(runtime::weights_sha256(torch::jit::load(good)), known);
+  runtime::Policy p(good);
+  EXPECT_TRUE(p.metadata().weights_verified);
+  EXPECT_EQ(p.metadata().weights_sha256, known);
+  // One weight altered (as flipped bytes in the file would), the digest kept.
+  const std::string altered = save_module("altered", src, {{"c", torch::tensor({0.1f, 0.2f, 0.31f})}}, &meta);
+  std::string msg;
+  EXPECT_EQ(load_error(altered, &msg), PolicyError::Kind::ChecksumMismatch);
+  EXPECT_TRUE(contains(msg, "altered.pt") && contains(msg, "weights_sha256")) << msg;
+  // Malformed digest: refused as a metadata mismatch.
+  const std::string short_meta = metadata_json("weights_sha256", "\"abc\"");
+  EXPECT_EQ(load_error(save_module("short_hash", src, {{"c", c}}, &short_meta)),
+            PolicyError::Kind::LayoutMismatch);
+  // No digest (exported before it existed): loads, not verified.
+  runtime::Policy legacy(save_module("legacy", src, {{"c", c}}));
+  EXPECT_FALSE(legacy.metadata().weights_verified);
+  EXPECT_TRUE(legacy.metadata().weights_sha256.empty());
+}
+
 TEST(PolicyLoad, MetadataLayoutMismatch) {
   struct Case {
     std::string field, value, expect_in_message;

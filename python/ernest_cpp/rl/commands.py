@@ -18,6 +18,16 @@ def _passive_openmp() -> None:
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
 def _settings_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preset", default="quick", choices=("quick", "paper"),
                    help="base settings (python/ernest_cpp/rl/presets/<preset>.yaml)")
@@ -108,6 +118,14 @@ def _export(args) -> int:
     return 0
 
 
+def _stamp(args) -> int:
+    from .export import HASH_KEY, stamp_policy
+
+    meta = stamp_policy(args.policy)
+    print(f"{args.policy}: {HASH_KEY} {meta[HASH_KEY]}")
+    return 0
+
+
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("train", help="train a TD3 specialist (seed 004 §4.1, §4.4)",
                               description="Train a TD3 specialist on a Gymnasium environment.")
@@ -118,7 +136,8 @@ def add_parser(subparsers) -> None:
     _settings_args(p)
     p.add_argument("--run-dir", help="output folder (default runs/<env>-seed<seed>)")
     p.add_argument("--resume", action="store_true", help="continue the run in --run-dir exactly")
-    p.add_argument("--steps", type=int, help="total transitions to collect (total_steps)")
+    p.add_argument("--steps", type=_positive_int,
+                   help="total transitions to collect (total_steps, at least 1)")
     p.add_argument("--seed", type=int)
     p.set_defaults(func=_train)
 
@@ -135,3 +154,12 @@ def add_parser(subparsers) -> None:
     p.add_argument("--out", required=True, help="output .pt file")
     p.add_argument("--policy-rate", type=float, default=2.0, help="policy rate in Hz (Table 5: 2)")
     p.set_defaults(func=_export)
+
+    p = subparsers.add_parser("stamp-policy", help="add the weights checksum to a policy exported "
+                              "without one (in place)",
+                              description="Add weights_sha256 to the metadata of a policy file "
+                              "exported before checksums existed; the rewritten file gives "
+                              "bit-identical actions. A file that already has a checksum is "
+                              "left as is, or refused if its weights do not match it.")
+    p.add_argument("policy", help="exported .pt file")
+    p.set_defaults(func=_stamp)

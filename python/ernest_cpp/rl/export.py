@@ -10,8 +10,14 @@ Metadata (observation layout version, names, sizes, policy rate, normalisation a
 is stored in the archive as the extra file ``ernest_metadata.json`` and as module attributes. The file
 is written to a temporary name, reloaded and compared with the Python actor on a set of inputs,
 and only then renamed into place.
+
+Integrity: the metadata carries ``weights_sha256`` (:func:`weights_sha256`), checked on every load
+here and in the C++ runtime (cpp/runtime/policy.cpp computes the same digest), so a file whose
+weights were altered is refused instead of silently giving other actions. Files exported before
+the digest existed still load, with a warning; ``ernest stamp-policy FILE`` adds it.
 """
 
+import hashlib
 import json
 import os
 import uuid
@@ -25,6 +31,7 @@ from . import layout as L
 from .networks import Actor
 
 METADATA_FILE = "ernest_metadata.json"
+HASH_KEY = "weights_sha256"
 
 
 class ExportError(ValueError):
@@ -91,7 +98,21 @@ def probe_inputs(lay: L.ObservationLayout, n: int = 256, seed: int = 0) -> np.nd
     return (lay.offset + x * lay.scale).astype(np.float32)
 
 
-def load_policy(path: str) -> tuple[torch.jit.ScriptModule, dict]:
+def weights_sha256(module: nn.Module) -> str:
+    """SHA-256 of every parameter and buffer of ``module``, in name order. Per tensor: the dotted
+    name, a newline, the shape as comma-separated integers, a newline, then the values as
+    little-endian float32. cpp/runtime/policy.cpp (weights_sha256) hashes the same bytes."""
+    tensors = dict(module.named_parameters())
+    tensors.update(dict(module.named_buffers()))
+    h = hashlib.sha256()
+    for name in sorted(tensors):
+        t = tensors[name].detach().to(torch.float32).contiguous().cpu()
+        h.update(f"{name}\n{','.join(str(d) for d in t.shape)}\n".encode())
+        h.update(t.numpy().astype("<f4", copy=False).tobytes())
+    return h.hexdigest()
+
+
+def _read(path: str) -> tuple[torch.jit.ScriptModule, dict]:
     extra = {METADATA_FILE: ""}
     try:
         with _quiet_jit():
@@ -102,7 +123,66 @@ def load_policy(path: str) -> tuple[torch.jit.ScriptModule, dict]:
         meta = json.loads(extra[METADATA_FILE])
     except json.JSONDecodeError:
         raise ExportError(f"{path}: missing or invalid {METADATA_FILE}") from None
+    if not isinstance(meta, dict):
+        raise ExportError(f"{path}: {METADATA_FILE} is not a JSON object")
     return mod, meta
+
+
+def load_policy(path: str) -> tuple[torch.jit.ScriptModule, dict]:
+    """Load an exported policy and check its weights against the metadata's digest. A file
+    without a digest (exported before it existed) loads with a warning."""
+    mod, meta = _read(path)
+    want = meta.get(HASH_KEY)
+    if want is None:
+        warnings.warn(f"{path}: no {HASH_KEY} in its metadata, its weights cannot be checked; "
+                      f"add it with `ernest stamp-policy {path}`", stacklevel=2)
+    elif weights_sha256(mod) != want:
+        raise ExportError(f"{path}: its weights do not match the {HASH_KEY} in its metadata "
+                          f"(file altered or corrupt; got {weights_sha256(mod)[:16]}..., "
+                          f"expected {str(want)[:16]}...)")
+    return mod, meta
+
+
+def _save_verified(module, meta: dict, path: str, check) -> None:
+    """Save to a temporary sibling, reload it, run ``check(loaded, meta_back)``, rename."""
+    tmp = f"{path}.tmp-{uuid.uuid4().hex[:8]}"
+    try:
+        with _quiet_jit():
+            torch.jit.save(module, tmp, _extra_files={METADATA_FILE: json.dumps(meta)})
+        loaded, meta_back = load_policy(tmp)
+        if meta_back != json.loads(json.dumps(meta)):
+            raise ExportError("metadata read back differs from the metadata written")
+        check(loaded)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def stamp_policy(path: str) -> dict:
+    """Add ``weights_sha256`` to a policy exported without it, in place (atomically); the
+    rewritten file must give bit-identical actions. Returns the metadata."""
+    mod, meta = _read(path)
+    digest = weights_sha256(mod)
+    if HASH_KEY in meta:
+        if meta[HASH_KEY] != digest:
+            raise ExportError(f"{path}: already has a {HASH_KEY} and its weights do not match it "
+                              f"(file altered or corrupt); not re-stamping")
+        return meta
+    meta[HASH_KEY] = digest
+    obs = torch.zeros(1, int(meta.get("obs_dim", 45)))
+    obs = torch.cat([obs, torch.from_numpy(np.random.default_rng(0).normal(
+        size=(16, obs.shape[1])).astype(np.float32))])
+    with torch.no_grad():
+        want = mod(obs)
+
+    def same(loaded):
+        with torch.no_grad():
+            if not torch.equal(loaded(obs), want):
+                raise ExportError("the re-saved policy gives different actions")
+
+    _save_verified(mod, meta, os.path.abspath(path), same)
+    return meta
 
 
 def export_actor(actor: Actor, lay: L.ObservationLayout, path: str,
@@ -119,15 +199,13 @@ def export_actor(actor: Actor, lay: L.ObservationLayout, path: str,
     meta = metadata(lay, policy_rate_hz, extra_meta)
     with _quiet_jit():
         module = torch.jit.script(ExportedPolicy(actor, lay, policy_rate_hz))
+    meta[HASH_KEY] = weights_sha256(module)
     path = os.path.abspath(path)
     os.makedirs(os.path.dirname(path), exist_ok=True)
-    tmp = f"{path}.tmp-{uuid.uuid4().hex[:8]}"
-    try:
-        with _quiet_jit():
-            torch.jit.save(module, tmp, _extra_files={METADATA_FILE: json.dumps(meta)})
-        loaded, meta_back = load_policy(tmp)
-        if meta_back != json.loads(json.dumps(meta)):
-            raise ExportError("metadata read back differs from the metadata written")
+    err = float("nan")
+
+    def check(loaded):
+        nonlocal err
         obs = probe_inputs(lay)
         with torch.no_grad():
             got = loaded(torch.from_numpy(obs)).numpy().astype(np.float64)
@@ -140,9 +218,7 @@ def export_actor(actor: Actor, lay: L.ObservationLayout, path: str,
                               f"(tolerance {atol} of the action range)")
         if not np.max(np.abs(single - got[1])) <= atol * float(np.max(span)):
             raise ExportError("single-observation and batched outputs differ")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+
+    _save_verified(module, meta, path, check)
     meta["verified_max_abs_error"] = err
     return meta

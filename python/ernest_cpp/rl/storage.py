@@ -12,10 +12,13 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import shutil
 import uuid
 
 MANIFEST = "manifest.json"
+# AtomicDir's temporaries: ".NAME.tmp-XXXXXXXX" while writing, "NAME.old-XXXXXXXX" while replacing.
+_STALE = re.compile(r"^(\..+\.tmp|.+\.old)-[0-9a-f]{8}$")
 
 
 class CorruptFileError(ValueError):
@@ -86,6 +89,23 @@ class AtomicDir:
         if old:
             shutil.rmtree(old, ignore_errors=True)
         return False
+
+
+def clean_stale(parent: str) -> list[str]:
+    """Remove the temporary folders a writer killed mid-write (``kill -9``, power loss) left in
+    ``parent``; returns their names. Call it only where one writer owns the folder (a run's
+    checkpoints folder): a live writer's temporary would be removed too."""
+    removed = []
+    try:
+        names = os.listdir(parent)
+    except FileNotFoundError:
+        return removed
+    for n in sorted(names):
+        p = os.path.join(parent, n)
+        if _STALE.match(n) and os.path.isdir(p) and not os.path.islink(p):
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(n)
+    return removed
 
 
 def read_manifest(path: str, kind: str, verify: bool = True) -> dict:

@@ -17,6 +17,7 @@ import collections
 import json
 import math
 import os
+import re
 import shutil
 import time
 
@@ -27,7 +28,7 @@ import yaml
 from . import layout as L
 from .exploration import make_exploration
 from .replay import ReplayBuffer
-from .storage import AtomicDir, CorruptFileError, read_manifest
+from .storage import AtomicDir, CorruptFileError, clean_stale, read_manifest
 from .td3 import TD3, TD3Config
 
 SCENARIOS = {"rockfield": "RockField", "step": "Step", "ripples": "Ripples", "slope": "Slope"}
@@ -238,9 +239,46 @@ def find_checkpoint(path: str) -> str:
                            f"folder with checkpoints/LATEST)")
 
 
+_STEP_DIR = re.compile(r"^step-\d+$")
+
+
+def newest_good_checkpoint(ck_root: str, exclude: str = "") -> str | None:
+    """The newest ``step-N`` folder of ``ck_root`` (other than ``exclude``) that verifies."""
+    try:
+        names = sorted((d for d in os.listdir(ck_root) if _STEP_DIR.match(d)),
+                       key=lambda d: int(d[5:]), reverse=True)
+    except OSError:
+        return None
+    for d in names:
+        p = os.path.join(ck_root, d)
+        if os.path.abspath(p) == os.path.abspath(exclude):
+            continue
+        try:
+            read_manifest(p, "checkpoint", verify=True)
+            return p
+        except CorruptFileError:
+            continue
+    return None
+
+
 def load_checkpoint(path: str, with_buffer: bool = True) -> dict:
-    """Verify and read a checkpoint: {'state': dict, 'agent': state_dict, 'buffer': ReplayBuffer}."""
+    """Verify and read a checkpoint: {'state': dict, 'agent': state_dict, 'buffer': ReplayBuffer}.
+    If it is damaged, the error names the newest intact checkpoint beside it and how to use it."""
     ck = find_checkpoint(path)
+    try:
+        return _read_checkpoint(ck, with_buffer)
+    except CorruptFileError as exc:
+        ck_root = os.path.dirname(os.path.abspath(ck))
+        good = newest_good_checkpoint(ck_root, exclude=ck)
+        if good is None:
+            raise
+        raise CorruptFileError(
+            f"{exc}. The newest intact checkpoint is {good}: resume from it with "
+            f"`echo {os.path.basename(good)} > {os.path.join(ck_root, 'LATEST')}`, or pass it "
+            f"as the checkpoint folder") from None
+
+
+def _read_checkpoint(ck: str, with_buffer: bool) -> dict:
     read_manifest(ck, "checkpoint", verify=True)
     try:
         with open(os.path.join(ck, "state.json")) as fh:
@@ -342,6 +380,7 @@ class Trainer:
 
     def save_checkpoint(self) -> str:
         ck_root = os.path.join(self.run_dir, "checkpoints")
+        clean_stale(ck_root)  # temporaries of a writer killed mid-save
         name = f"step-{self.step:012d}"
         with AtomicDir(os.path.join(ck_root, name), "checkpoint",
                        {"step": self.step, "env_id": self.env_id}) as tmp:
@@ -355,13 +394,18 @@ class Trainer:
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(latest_tmp, os.path.join(ck_root, "LATEST"))
+        # Prune only checkpoints older than the one just written (which is the newest good one):
+        # those with a higher step are from beyond a resume point (e.g. a corrupt one the user
+        # stepped back from) and are left for the user to inspect.
         keep = max(1, int(self.cfg["checkpoint"]["keep"]))
-        old = sorted(d for d in os.listdir(ck_root) if d.startswith("step-"))[:-keep]
-        for d in old:
+        older = sorted((d for d in os.listdir(ck_root) if _STEP_DIR.match(d) and
+                        int(d[5:]) < self.step), key=lambda d: int(d[5:]))
+        for d in older[:max(0, len(older) - (keep - 1))]:
             shutil.rmtree(os.path.join(ck_root, d), ignore_errors=True)
         return os.path.join(ck_root, name)
 
     def _restore(self) -> None:
+        clean_stale(os.path.join(self.run_dir, "checkpoints"))
         ck = load_checkpoint(self.run_dir)
         st = ck["state"]
         if st["env_id"] != self.env_id or st["obs_dim"] != self.obs_dim or \
@@ -460,6 +504,8 @@ class Trainer:
     def train(self, total_steps: int | None = None) -> dict:
         cfg = self.cfg
         total = int(total_steps if total_steps is not None else cfg["total_steps"])
+        if total < 1:  # nothing to train on would end in a NaN summary
+            raise ValueError(f"total_steps = {total}: must be at least 1")
         writer = _writer(os.path.join(self.run_dir, "tb")) if cfg["log"]["tensorboard"] else None
         bar = _bar(total, self.step, cfg["log"]["progress_bar"])
         bs, ups = self.td3_cfg.batch_size, float(cfg["updates_per_step"])

@@ -1,0 +1,194 @@
+"""Integrity of exported policies and training checkpoints (issue 18, item 5): altered weights
+are refused in Python and in the C++ runtime, a policy is checked before ``ernest evaluate`` runs
+anything, a writer killed mid-checkpoint leaves nothing behind for good, a corrupt latest
+checkpoint points at the newest intact one, and pruning never deletes the checkpoint just saved.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+import torch
+
+from ernest_cpp import cli, sensing
+from ernest_cpp.envs import ErnestEnv
+from ernest_cpp.rl import config as C
+from ernest_cpp.rl.export import (HASH_KEY, METADATA_FILE, ExportError, _quiet_jit, export_actor,
+                                  load_policy, metadata, weights_sha256)
+from ernest_cpp.rl.networks import Actor
+from ernest_cpp.rl.storage import CorruptFileError, clean_stale
+from ernest_cpp.rl.trainer import Trainer, load_checkpoint
+from test_runtime import run_runtime
+
+LAYOUT = ErnestEnv("flat").observation_layout
+
+
+def _export(path, seed=0) -> str:
+    torch.manual_seed(seed)
+    export_actor(Actor(sensing.OBSERVATION_SIZE, sensing.ACTION_SIZE, 64), LAYOUT, str(path))
+    return str(path)
+
+
+def _resave(src: str, dst: str, meta: dict, module=None) -> str:
+    """Rewrite a policy file with other metadata (and optionally another module)."""
+    with _quiet_jit():
+        mod = module if module is not None else torch.jit.load(src)
+        torch.jit.save(mod, dst, _extra_files={METADATA_FILE: json.dumps(meta)})
+    return dst
+
+
+def test_weights_digest_is_the_documented_bytes():
+    # Independent of the implementation: sha256 over name, shape and float32 bytes, name order.
+    import hashlib
+
+    m = torch.nn.Linear(2, 1)
+    with torch.no_grad():
+        m.weight.copy_(torch.tensor([[0.5, -1.0]]))
+        m.bias.fill_(2.0)
+    h = hashlib.sha256()
+    h.update(b"bias\n1\n" + np.array([2.0], "<f4").tobytes())
+    h.update(b"weight\n1,2\n" + np.array([0.5, -1.0], "<f4").tobytes())
+    assert weights_sha256(m) == h.hexdigest()
+
+
+def test_flipped_weight_bytes_are_refused_in_python_and_cpp(tmp_path):
+    good = _export(tmp_path / "good.pt")
+    mod, meta = load_policy(good)
+    assert meta[HASH_KEY] == weights_sha256(mod)
+    # Flip 100 bytes inside the first layer's weights, located by their float32 bytes.
+    w = next(t for n, t in mod.named_parameters() if n.endswith("weight"))
+    data = bytearray(open(good, "rb").read())
+    at = data.find(w.detach().numpy().astype("<f4").tobytes()[:64])
+    assert at > 0
+    for i in range(at + 200, at + 300):
+        data[i] ^= 0xFF
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(bytes(data))
+    # torch itself loads it and computes other actions: the corruption is otherwise silent.
+    with _quiet_jit():
+        raw = torch.jit.load(str(bad))
+    obs = torch.from_numpy(np.full(45, 0.3, np.float32))
+    assert not torch.equal(raw(obs), mod(obs))
+    with pytest.raises(ExportError, match="do not match the weights_sha256"):
+        load_policy(str(bad))
+    r = run_runtime("--policy", str(bad), "--scenario", "flat", "--seed", "1", "--duration", "1")
+    assert r.returncode == 1 and "checksum mismatch" in r.stderr and "bad.pt" in r.stderr, r.stderr
+    r = run_runtime("--policy", good, "--scenario", "flat", "--seed", "1", "--duration", "1")
+    assert r.returncode == 0 and "warning" not in r.stderr, r.stderr
+
+
+def test_policy_without_digest_loads_with_a_warning_and_stamp_adds_it(tmp_path, capsys):
+    good = _export(tmp_path / "good.pt")
+    _, meta = load_policy(good)
+    legacy_meta = {k: v for k, v in meta.items() if k != HASH_KEY}
+    legacy = _resave(good, str(tmp_path / "legacy.pt"), legacy_meta)
+    with pytest.warns(UserWarning, match="stamp-policy"):
+        mod, _ = load_policy(legacy)
+    r = run_runtime("--policy", legacy, "--scenario", "flat", "--seed", "1", "--duration", "1")
+    assert r.returncode == 0 and "no weights_sha256" in r.stderr, r.stderr
+    obs = torch.from_numpy(np.random.default_rng(1).normal(size=(8, 45)).astype(np.float32))
+    before = mod(obs)
+    assert cli.main(["stamp-policy", legacy]) == 0
+    assert "weights_sha256" in capsys.readouterr().out
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        stamped, smeta = load_policy(legacy)
+    assert smeta[HASH_KEY] == meta[HASH_KEY]  # the same digest the exporter wrote
+    assert torch.equal(stamped(obs), before)
+    # Stamping never blesses an altered file that already has a digest.
+    with _quiet_jit():
+        altered = torch.jit.load(good)
+    with torch.no_grad():
+        next(iter(altered.parameters())).add_(1e-3)
+    tampered = _resave(good, str(tmp_path / "tampered.pt"), meta, altered)
+    assert cli.main(["stamp-policy", tampered]) == 2
+    assert "not re-stamping" in capsys.readouterr().err
+
+
+class _TwoOut(torch.nn.Module):
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return x[..., :2]
+
+
+@pytest.mark.parametrize("case", ["module returns 2", "metadata says 10"])
+def test_evaluate_refuses_a_wrong_size_policy_before_any_episode(tmp_path, capsys, case):
+    with _quiet_jit():
+        module = torch.jit.script(_TwoOut())
+    meta = metadata(LAYOUT, 2.0)
+    if case == "metadata says 10":
+        meta["obs_dim"] = 10
+    meta[HASH_KEY] = weights_sha256(module)
+    path = _resave("", str(tmp_path / "wrong.pt"), meta, module)
+    out = tmp_path / "report"
+    assert cli.main(["evaluate", "--policy", path, "--out", str(out), "--no-video"]) == 2
+    cap = capsys.readouterr()
+    assert "[ 1/" not in cap.out  # no episode ran
+    assert "wrong.pt" in cap.err and len(cap.err.strip().splitlines()) == 1
+    assert ("returns 2 values" if case == "module returns 2" else "maps 10 observation") in cap.err
+    assert not (out / "report.md").exists()
+
+
+def test_writer_killed_mid_checkpoint_leaves_no_temporary_for_good(tmp_path):
+    parent = tmp_path / "checkpoints"
+    code = ("import sys, time\nfrom ernest_cpp.rl.storage import AtomicDir\n"
+            f"with AtomicDir({str(parent / 'step-000000000100')!r}, 'checkpoint') as t:\n"
+            "    open(t + '/agent.pt', 'wb').write(b'x' * 1000)\n"
+            "    print('writing', flush=True)\n    time.sleep(60)\n")
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "writing"
+    os.kill(p.pid, signal.SIGKILL)
+    p.wait(timeout=30)
+    left = os.listdir(parent)
+    assert len(left) == 1 and left[0].startswith(".step-000000000100.tmp-")
+    os.makedirs(parent / "step-000000000050.old-0123abcd")  # killed while replacing
+    os.makedirs(parent / "step-000000000050")
+    assert sorted(clean_stale(str(parent))) == sorted([left[0], "step-000000000050.old-0123abcd"])
+    assert os.listdir(parent) == ["step-000000000050"]
+
+
+def _cfg(keep: int) -> dict:
+    sets = ["env.id=ernest-toy/PointMass-v0", "td3.hidden=16", "td3.batch_size=32",
+            "random_steps=100", "learning_starts=100", "total_steps=200",
+            "eval.every_steps=0", "checkpoint.every_steps=100", f"checkpoint.keep={keep}",
+            "log.progress_bar=false", "log.tensorboard=false", "buffer_size=1000"]
+    return C.build_config("quick", None, sets)
+
+
+def test_corrupt_latest_checkpoint_points_at_the_good_one_and_pruning_keeps_it(tmp_path):
+    run = tmp_path / "run"
+    tr = Trainer(_cfg(keep=3), str(run))
+    tr.train()
+    tr.close()
+    ck_root = run / "checkpoints"
+    assert sorted(d for d in os.listdir(ck_root) if d.startswith("step-")) == \
+        ["step-000000000100", "step-000000000200"]
+    stale = ck_root / ".step-000000000300.tmp-deadbeef"  # a save killed with kill -9
+    os.makedirs(stale / "buffer")
+    agent = ck_root / "step-000000000200" / "agent.pt"
+    data = bytearray(agent.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    agent.write_bytes(bytes(data))
+    with pytest.raises(CorruptFileError) as err:
+        load_checkpoint(str(run))
+    msg = str(err.value)
+    assert "step-000000000200" in msg and "checksum mismatch" in msg
+    assert f"newest intact checkpoint is {ck_root / 'step-000000000100'}" in msg
+    assert f"echo step-000000000100 > {ck_root / 'LATEST'}" in msg
+    # Follow the advice and resume with keep=1: the save at 150 must survive its own pruning.
+    (ck_root / "LATEST").write_text("step-000000000100\n")
+    tr = Trainer(_cfg(keep=1), str(run), resume=True)
+    assert tr.step == 100 and not stale.exists()
+    tr.train(total_steps=150)
+    tr.close()
+    ck = load_checkpoint(str(run), with_buffer=False)
+    assert ck["state"]["step"] == 150 and ck["path"].endswith("step-000000000150")
+    left = sorted(d for d in os.listdir(ck_root) if d.startswith("step-"))
+    # step-100 pruned (older, keep=1); step-200 (beyond the resume point) left to inspect.
+    assert left == ["step-000000000150", "step-000000000200"]
