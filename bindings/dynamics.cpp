@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "ernest/common/validation.hpp"
 #include "ernest/dynamics/batch_stepper.hpp"
 #include "ernest/dynamics/rover_parameters.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
@@ -49,7 +50,15 @@ void bind_dynamics(py::module_& m) {
   py::class_<MotorElectrical>(m, "MotorElectrical", "Winding current [A] and power [W] (eq 40).")
       .def_readonly("current", &MotorElectrical::current)
       .def_readonly("power", &MotorElectrical::power);
-  m.def("motor_electrical", &motor_electrical, "m"_a, "output_torque"_a, "output_speed"_a,
+  // (finite inputs checked here, not in the C++ function: the step calls it with its own state,
+  // whose NaN is reported as SimulationDiverged by the divergence check)
+  m.def("motor_electrical",
+        [](const MotorParameters& mp, double output_torque, double output_speed) {
+          ernest::require_finite("motor_electrical", "output_torque", output_torque);
+          ernest::require_finite("motor_electrical", "output_speed", output_speed);
+          return motor_electrical(mp, output_torque, output_speed);
+        },
+        "m"_a, "output_torque"_a, "output_speed"_a,
         "Current and electrical power P = I (R I + K_tau omega) (eq 40) for an output torque "
         "[N m] and speed [rad/s]; the gearbox efficiency applies in the direction power flows.");
 
@@ -97,11 +106,26 @@ void bind_dynamics(py::module_& m) {
                   "x0"_a = -5.0, "y0"_a = -5.0, "Flat ground at height z.")
       .def_static("slope", &HeightMap::slope, "angle"_a, "length"_a, "width"_a, "spacing"_a,
                   "x0"_a = -5.0, "y0"_a = -5.0, "Plane z = tan(angle) x rising along +x.")
-      .def("height", &HeightMap::height, "x"_a, "y"_a, "Bilinear height [m].")
-      .def("normal", &HeightMap::normal, "x"_a, "y"_a, "Unit upward normal of the surface.")
+      // (finite x, y checked here: the C++ queries are the simulation's hot path)
+      .def("height",
+           [](const HeightMap& hm, double x, double y) {
+             ernest::require_finite("HeightMap.height", "x", x);
+             ernest::require_finite("HeightMap.height", "y", y);
+             return hm.height(x, y);
+           },
+           "x"_a, "y"_a, "Bilinear height [m].")
+      .def("normal",
+           [](const HeightMap& hm, double x, double y) {
+             ernest::require_finite("HeightMap.normal", "x", x);
+             ernest::require_finite("HeightMap.normal", "y", y);
+             return hm.normal(x, y);
+           },
+           "x"_a, "y"_a, "Unit upward normal of the surface.")
       .def(
           "height_normal",
           [](const HeightMap& m, double x, double y) {
+            ernest::require_finite("HeightMap.height_normal", "x", x);
+            ernest::require_finite("HeightMap.height_normal", "y", y);
             Eigen::Vector3d n;
             const double h = m.height_normal(x, y, n);
             return py::make_tuple(h, n);
@@ -267,7 +291,11 @@ void bind_dynamics(py::module_& m) {
   py::class_<RoverSim, std::shared_ptr<RoverSim>>(
       m, "RoverSim",
       "ERNEST on ODE: chassis, Active Gimbal Suspension with roll clutch, bogie, four driven "
-      "wheels on Bekker–Wong soil or rigid ground, rigid boxes (seed 004 §2–3).")
+      "wheels on Bekker–Wong soil or rigid ground, rigid boxes (seed 004 §2–3).\n\n"
+      "Threads: one thread at a time per RoverSim. A call made while another thread is inside "
+      "one (e.g. step_n, which releases the GIL) raises RuntimeError instead of waiting; use one "
+      "RoverSim per thread or a lock. After an ODE internal error (SimulationDiverged) the "
+      "simulator refuses further steps, reset and restore: create a new one.")
       .def(py::init<const RoverParameters&, const HeightMap&, const std::vector<BoxObstacle>&,
                     const SimOptions&>(),
            "params"_a, "terrain"_a, "obstacles"_a = std::vector<BoxObstacle>{},
@@ -281,7 +309,7 @@ void bind_dynamics(py::module_& m) {
            "One physics step; raises SimulationDiverged on a non-finite or absurd state.")
       .def("step_n", &RoverSim::step_n, "n"_a, py::call_guard<py::gil_scoped_release>(),
            "n physics steps without returning to Python.")
-      .def_property_readonly("state", &RoverSim::state, py::return_value_policy::copy,
+      .def_property_readonly("state", &RoverSim::state_copy,
                              "RoverState after the last step (a copy).")
       .def(
           "observation",

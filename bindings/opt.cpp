@@ -5,7 +5,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
+
 #include "bindings.hpp"
+#include "ernest/common/validation.hpp"
 #include "ernest/opt/asterix_model.hpp"
 #include "ernest/opt/gait.hpp"
 #include "ernest/opt/metrics.hpp"
@@ -33,8 +36,12 @@ SteeringFunction steering_from_python(py::function steering) {
 }
 
 // Samples of a (joint, time) -> (q, dq, ddq) function as three (len(times), joints) arrays.
+// NaN or inf times raise ValueError naming `what` (they used to give NaN or zeros).
 template <class F>
-py::tuple sample_joints(int joints, const Eigen::VectorXd& times, F&& f) {
+py::tuple sample_joints(const char* owner, const char* arg, int joints,
+                        const Eigen::VectorXd& times, F&& f) {
+  for (Eigen::Index k = 0; k < times.size(); ++k)
+    ernest::require_finite(owner, (arg + ("[" + std::to_string(k) + "]")).c_str(), times[k]);
   RowMatrix q(times.size(), joints), dq(times.size(), joints), ddq(times.size(), joints);
   {
     py::gil_scoped_release release;
@@ -44,21 +51,54 @@ py::tuple sample_joints(int joints, const Eigen::VectorXd& times, F&& f) {
   return py::make_tuple(q, dq, ddq);
 }
 
+constexpr int kMaxConstraintRows = 100000;  // per constraint function (minimize_slsqp)
+
+// A callback's result as (first, second), or ValueError naming the callback and what it returns.
+std::pair<py::object, py::object> unpack2(const py::object& out, const std::string& what) {
+  if (!py::isinstance<py::sequence>(out) || py::isinstance<py::str>(out) || py::len(out) != 2)
+    throw std::invalid_argument(what + ", got " + py::repr(out).cast<std::string>());
+  const auto seq = py::reinterpret_borrow<py::sequence>(out);
+  return {seq[0], seq[1]};
+}
+
+// One returned item cast to T, or ValueError naming it (instead of pybind's "Unable to cast").
+template <class T>
+T cast_item(const py::object& item, const std::string& what) {
+  try {
+    return item.cast<T>();
+  } catch (const py::cast_error&) {
+    throw std::invalid_argument(what + ", got " + py::repr(item).cast<std::string>());
+  }
+}
+
+// NaN or inf from a callback stops the run with ValueError (NLopt would otherwise end quietly).
+template <class V>
+void require_finite_output(const V& v, const std::string& what) {
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v.data()[i]))
+      throw std::invalid_argument(what + " has a non-finite entry (" + std::to_string(v.data()[i]) +
+                                  " at index " + std::to_string(i) + ")");
+}
+
 // A Python callable fun(x) -> (values, jacobian) as a C++ ConstraintFunction. Called with the GIL
 // held (minimize_slsqp keeps it for Python callbacks); errors propagate as py::error_already_set,
 // which the solver captures and rethrows after NLopt returns.
 ConstraintFunction wrap_constraint(py::function fun, int m, int n) {
   return [fun, m, n](const double* x, double* c, double* jac) {
     py::array_t<double> xa(n, x);
-    py::tuple out = fun(xa);
-    if (out.size() != 2) throw std::invalid_argument("constraint must return (values, jacobian)");
-    auto values = out[0].cast<Eigen::VectorXd>();
+    const auto out =
+        unpack2(fun(xa), "minimize_slsqp: a constraint fun(x) must return (values, jacobian)");
+    auto values = cast_item<Eigen::VectorXd>(
+        out.first, "minimize_slsqp: constraint values must be a sequence of m floats");
     if (values.size() != m) throw std::invalid_argument("constraint returned the wrong number of values");
+    require_finite_output(values, "minimize_slsqp: constraint values");
     for (int i = 0; i < m; ++i) c[i] = values[i];
     if (jac) {
-      auto J = out[1].cast<RowMatrix>();
+      auto J = cast_item<RowMatrix>(
+          out.second, "minimize_slsqp: a constraint jacobian must be an (m, n) array");
       if (J.rows() != m || J.cols() != n)
         throw std::invalid_argument("constraint jacobian must have shape (m, n)");
+      require_finite_output(J, "minimize_slsqp: constraint jacobian");
       for (int i = 0; i < m; ++i)
         for (int k = 0; k < n; ++k) jac[i * n + k] = J(i, k);
     }
@@ -179,8 +219,10 @@ void bind_opt(py::module_& m) {
       .def("acceleration", &Gait::acceleration, "t"_a, "Joint accelerations at phase t.")
       .def("sample",
            [](const Gait& g, const Eigen::VectorXd& times) {
-             return sample_joints(g.joints(), times, [&g](int j, double t, double& q, double& dq,
-                                                          double& ddq) { g.evaluate(j, t, q, dq, ddq); });
+             return sample_joints("Gait.sample", "times", g.joints(), times,
+                                  [&g](int j, double t, double& q, double& dq, double& ddq) {
+                                    g.evaluate(j, t, q, dq, ddq);
+                                  });
            },
            "times"_a, "(q, dq, ddq), each of shape (len(times), joints).")
       .def("check_limits", &Gait::check_limits, "position_limit"_a, "velocity_limit"_a,
@@ -236,15 +278,29 @@ void bind_opt(py::module_& m) {
           p.upper = std::move(upper);
           p.objective = [objective, n](const double* x, double* grad) {
             py::array_t<double> xa(n, x);
-            py::tuple out = objective(xa);
-            if (out.size() != 2) throw std::invalid_argument("objective must return (value, gradient)");
+            const auto out = unpack2(objective(xa),
+                                     "minimize_slsqp: objective(x) must return (value, gradient)");
+            const double value = cast_item<double>(
+                out.first, "minimize_slsqp: the objective's value must be a float");
+            ernest::require(std::isfinite(value),
+                            "minimize_slsqp: objective(x) returned a non-finite value (" +
+                                std::to_string(value) + ")");
             if (grad) {
-              auto g = out[1].cast<Eigen::VectorXd>();
+              auto g = cast_item<Eigen::VectorXd>(
+                  out.second,
+                  "minimize_slsqp: the objective's gradient must be a sequence of len(x0) floats");
               if (g.size() != n) throw std::invalid_argument("gradient must have len(x0) entries");
+              require_finite_output(g, "minimize_slsqp: the objective's gradient");
               for (int i = 0; i < n; ++i) grad[i] = g[i];
             }
-            return out[0].cast<double>();
+            return value;
           };
+          // m rows of n values each are allocated per constraint: bound m before NLopt does
+          for (const auto* set : {&inequality, &equality})
+            for (const auto& c : *set)
+              ernest::require_in_range("minimize_slsqp",
+                                       set == &inequality ? "inequality m" : "equality m", c.first,
+                                       0, kMaxConstraintRows);
           for (const auto& c : inequality) p.inequality.push_back({c.first, wrap_constraint(c.second, c.first, n)});
           for (const auto& c : equality) p.equality.push_back({c.first, wrap_constraint(c.second, c.first, n)});
           // The GIL stays held: the callbacks are Python. An exception raised in one is captured,
@@ -358,8 +414,10 @@ void bind_opt(py::module_& m) {
                              "Waypoints (joints x N) of Bezier/Linear/Spline; empty for Naive.")
       .def("sample",
            [](const TransitionResult& r, const Eigen::VectorXd& tau) {
-             return sample_joints(r.joints(), tau, [&r](int j, double t, double& q, double& dq,
-                                                        double& ddq) { r.evaluate(j, t, q, dq, ddq); });
+             return sample_joints("TransitionResult.sample", "tau", r.joints(), tau,
+                                  [&r](int j, double t, double& q, double& dq, double& ddq) {
+                                    r.evaluate(j, t, q, dq, ddq);
+                                  });
            },
            "tau"_a, "(q, dq, ddq) of the transition at tau in [0, T] after t1.")
       .def("peaks",
@@ -372,7 +430,7 @@ void bind_opt(py::module_& m) {
       .def("sample_executed",
            [](const TransitionResult& r, const TransitionProblem& problem,
               const Eigen::VectorXd& times) {
-             return sample_joints(r.joints(), times,
+             return sample_joints("TransitionResult.sample_executed", "times", r.joints(), times,
                                   [&](int j, double t, double& q, double& dq, double& ddq) {
                                     r.executed(problem, j, t, q, dq, ddq);
                                   });

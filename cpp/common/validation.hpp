@@ -18,8 +18,10 @@ inline void require_in_range(const char* owner, const char* field, double value,
                              double hi) {
   if (std::isfinite(value) && value >= lo && value <= hi) return;
   std::ostringstream os;
-  os << owner << "." << field << " = " << value << " is outside the allowed range [" << lo << ", "
-     << (hi == kInf ? std::string("inf") : std::to_string(hi)) << "]";
+  os << owner << "." << field << " = " << value << " is outside the allowed range [" << lo << ", ";
+  if (hi == kInf) os << "inf";
+  else os << hi;
+  os << "]";
   if (!std::isfinite(value)) os << " (must be finite)";
   throw std::invalid_argument(os.str());
 }

@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "ernest/common/exclusive_use.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::dynamics {
@@ -68,6 +69,7 @@ void BatchStepper::worker_loop(int worker) {
 }
 
 void BatchStepper::step(const double* commands, int n_steps, double* observations) {
+  const ExclusiveUse busy(in_use_, "BatchStepper.step");
   require(n_steps >= 0, "BatchStepper.step: n_steps must be >= 0");
   for (auto& e : errors_) e = nullptr;
   commands_ = commands;

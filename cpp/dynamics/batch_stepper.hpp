@@ -2,6 +2,7 @@
 // row-major arrays, one call per batch step (for the environments and the Python bindings).
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <exception>
 #include <memory>
@@ -31,6 +32,7 @@ class BatchStepper {
   /// keep the current commands; n_steps physics steps for every rover; observations (may be
   /// nullptr): size() x RoverSim::kObservationSize. If rovers fail, all the others still step;
   /// then the first failure (by rover index) is rethrown, SimulationDiverged naming the rover.
+  /// One thread at a time: a second concurrent call throws ConcurrentUse.
   void step(const double* commands, int n_steps, double* observations);
 
  private:
@@ -49,6 +51,7 @@ class BatchStepper {
   const double* commands_ = nullptr;
   double* observations_ = nullptr;
   int n_steps_ = 0;
+  std::atomic<bool> in_use_{false};  // step() from one thread at a time (exclusive_use.hpp)
 };
 
 }  // namespace ernest::dynamics

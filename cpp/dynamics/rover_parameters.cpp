@@ -72,6 +72,7 @@ void RoverParameters::validate() const {
 }
 
 Eigen::Vector3d RoverParameters::wheel_centre(int i) const {
+  require_in_range("RoverParameters.wheel_centre", "i", i, 0, 3);
   const double x = (i < 2 ? 0.5 : -0.5) * wheelbase;
   const double y = (i % 2 == 0 ? 0.5 : -0.5) * track;
   return {x, y, 0.0};

@@ -6,6 +6,14 @@
 
 namespace ernest::dynamics {
 
+/// Allowed range of Commands' rates [rad/s] and torques [N m] (symmetric): bounds far above what
+/// the rover's motors can do, small enough to keep ODE's constraint solve finite.
+inline constexpr double kMaxCommandRate = 100.0;
+inline constexpr double kMaxCommandTorque = 1e5;
+
+/// Allowed range of synchronise_wheels' forward speed [m/s] (symmetric).
+inline constexpr double kMaxSyncSpeed = 100.0;
+
 /// DC motor + Harmonic Drive gearbox (seed 004 §2.1.1: identical actuators, 50:1 for the wheels,
 /// 160:1 for the gimbal). Output torque = N * eta * K_tau * I when the motor drives the load.
 struct MotorParameters {

@@ -5,10 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdarg>
+#include <cstdio>
 #include <cstring>
+#include <string>
 #include <mutex>
 #include <random>
 
+#include "ernest/common/exclusive_use.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/dynamics/rover_sim_impl.hpp"
 
@@ -29,6 +32,15 @@ void init_ode_once() {
     dSetMessageHandler([](int num, const char*, va_list) {
       if (num == d_ERR_LCP) ++ode_lcp_messages;
     });
+    // ODE's error and debug handlers must not return (ODE aborts if they do): throw instead,
+    // through ODE's C++ frames (built with unwind tables), to RoverSim::Impl::run_ode().
+    const auto raise = [](int num, const char* msg, va_list ap) {
+      char text[512];
+      std::vsnprintf(text, sizeof text, msg, ap);
+      throw OdeInternalError("ODE error " + std::to_string(num) + ": " + text);
+    };
+    dSetErrorHandler(raise);
+    dSetDebugHandler(raise);
   });
   // Every thread that steps a world needs ODE's per-thread data (collision caches).
   thread_local bool allocated = false;
@@ -170,15 +182,21 @@ void SimOptions::validate() const {
 }
 
 void Commands::validate() const {
+  // Physical ranges, far beyond any motor of the rover but small enough that ODE's constraint
+  // solve stays finite: a velocity target of 1e306 rad/s passed finite checks and made ODE abort
+  // the process (issue 18).
   const char* o = "Commands";
   for (int i = 0; i < 4; ++i) {
-    require_finite(o, "wheel_speed", wheel_speed[i]);
-    require_finite(o, "wheel_torque", wheel_torque[i]);
+    const std::string k = "[" + std::to_string(i) + "]";
+    require_in_range(o, ("wheel_speed" + k).c_str(), wheel_speed[i], -kMaxCommandRate,
+                     kMaxCommandRate);
+    require_in_range(o, ("wheel_torque" + k).c_str(), wheel_torque[i], -kMaxCommandTorque,
+                     kMaxCommandTorque);
   }
-  require_finite(o, "yaw_rate", yaw_rate);
-  require_finite(o, "roll_rate", roll_rate);
-  require_finite(o, "yaw_torque", yaw_torque);
-  require_finite(o, "roll_torque", roll_torque);
+  require_in_range(o, "yaw_rate", yaw_rate, -kMaxCommandRate, kMaxCommandRate);
+  require_in_range(o, "roll_rate", roll_rate, -kMaxCommandRate, kMaxCommandRate);
+  require_in_range(o, "yaw_torque", yaw_torque, -kMaxCommandTorque, kMaxCommandTorque);
+  require_in_range(o, "roll_torque", roll_torque, -kMaxCommandTorque, kMaxCommandTorque);
 }
 
 RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
@@ -396,6 +414,7 @@ RoverSim::RoverSim(const RoverParameters& params, const HeightMap& terrain,
 RoverSim::~RoverSim() = default;
 
 void RoverSim::reset(double x, double y, double heading, double psi, double phi, double speed) {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.reset");
   require_finite("RoverSim.reset", "x", x);
   require_finite("RoverSim.reset", "y", y);
   require_finite("RoverSim.reset", "heading", heading);
@@ -403,11 +422,14 @@ void RoverSim::reset(double x, double y, double heading, double psi, double phi,
   require_in_range("RoverSim.reset", "phi", phi, -impl_->p.roll_limit, impl_->p.roll_limit);
   init_ode_once();
   require_in_range("RoverSim.reset", "speed", speed, -5.0, 5.0);
-  impl_->place(x, y, heading, psi, phi, speed);
-  impl_->read_outputs(0.0);
+  impl_->run_ode([&] {
+    impl_->place(x, y, heading, psi, phi, speed);
+    impl_->read_outputs(0.0);
+  });
 }
 
 void RoverSim::set_commands(const Commands& c) {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.set_commands");
   c.validate();
   impl_->cmd = c;
 }
@@ -415,6 +437,12 @@ void RoverSim::set_commands(const Commands& c) {
 const Commands& RoverSim::commands() const { return impl_->cmd; }
 
 void RoverSim::set_command_vector(const double* c) {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.set_command_vector");
+  // the flags are 0 or 1: a NaN compares != 0 and would read as true (issue 18)
+  require(c[6] == 0.0 || c[6] == 1.0, "RoverSim commands: gimbal_enabled (column 6) = " +
+                                          std::to_string(c[6]) + " must be 0 or 1");
+  require(c[7] == 0.0 || c[7] == 1.0, "RoverSim commands: clutch_engage (column 7) = " +
+                                          std::to_string(c[7]) + " must be 0 or 1");
   Commands k = impl_->cmd;
   k.wheel_mode = k.yaw_mode = k.roll_mode = ActuatorMode::Velocity;
   for (int i = 0; i < 4; ++i) k.wheel_speed[i] = c[i];
@@ -422,17 +450,29 @@ void RoverSim::set_command_vector(const double* c) {
   k.roll_rate = c[5];
   k.gimbal_enabled = c[6] != 0.0;
   k.clutch_engage = c[7] != 0.0;
-  set_commands(k);
+  k.validate();
+  impl_->cmd = k;
 }
 
-void RoverSim::step() { impl_->step(); }
+void RoverSim::step() {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.step");
+  impl_->run_ode([&] { impl_->step(); });
+}
 
 void RoverSim::step_n(int n) {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.step_n");
   require(n >= 0, "RoverSim.step_n: n must be >= 0");
-  for (int k = 0; k < n; ++k) impl_->step();
+  impl_->run_ode([&] {
+    for (int k = 0; k < n; ++k) impl_->step();
+  });
 }
 
 const RoverState& RoverSim::state() const { return impl_->st; }
+
+RoverState RoverSim::state_copy() const {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.state");
+  return impl_->st;
+}
 
 std::vector<std::string> RoverSim::observation_names() {
   std::vector<std::string> n = {"time", "x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy", "vz",
@@ -453,6 +493,7 @@ std::vector<std::string> RoverSim::observation_names() {
 }
 
 void RoverSim::observation(double* o) const {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.observation");
   const RoverState& s = impl_->st;
   int k = 0;
   o[k++] = s.time;
@@ -480,6 +521,7 @@ void RoverSim::observation(double* o) const {
 }
 
 Snapshot RoverSim::snapshot() const {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.snapshot");
   Snapshot s;
   for (int b = 0; b < 6; ++b) {
     const dBodyID id = impl_->body[b];
@@ -510,6 +552,8 @@ Snapshot RoverSim::snapshot() const {
 }
 
 void RoverSim::restore(const Snapshot& s) {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.restore");
+  impl_->run_ode([] {});  // refuses after an ODE internal error
   require(s.valid, "RoverSim.restore: empty snapshot");
   init_ode_once();
   impl_->lcp.load(s.solver_patterns);  // first: it may throw on a corrupt snapshot
@@ -540,11 +584,13 @@ void RoverSim::restore(const Snapshot& s) {
 }
 
 void RoverSim::apply_chassis_force(const Eigen::Vector3d& force) {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.apply_chassis_force");
   require(force.allFinite(), "RoverSim.apply_chassis_force: force must be finite");
   impl_->pending_force += force;
 }
 
 double RoverSim::kinetic_energy() const {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.kinetic_energy");
   double e = 0.0;
   for (auto b : impl_->body) {
     dMass m;
@@ -561,6 +607,7 @@ double RoverSim::kinetic_energy() const {
 }
 
 double RoverSim::potential_energy() const {
+  const ExclusiveUse busy(impl_->in_use, "RoverSim.potential_energy");
   double e = 0.0;
   for (auto b : impl_->body) {
     dMass m;

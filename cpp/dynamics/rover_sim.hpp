@@ -198,6 +198,11 @@ struct Snapshot {
   bool valid = false;
 };
 
+/// One thread at a time: every public method that reads or changes the simulation refuses with
+/// ConcurrentUse (std::runtime_error; RuntimeError in Python) while another thread is inside one
+/// of them (e.g. step_n with the GIL released). Different RoverSims run in parallel freely.
+/// After ODE fails internally (SimulationDiverged "ODE internal error") a RoverSim refuses every
+/// further step, reset and restore: create a new one.
 class RoverSim {
  public:
   static constexpr int kObservationSize = 65;
@@ -227,6 +232,8 @@ class RoverSim {
   void step_n(int n);
 
   const RoverState& state() const;
+  /// A copy of state(), taken under the one-thread-at-a-time rule (for the Python binding).
+  RoverState state_copy() const;
   /// Fixed layout of kObservationSize values; names from observation_names().
   void observation(double* out) const;
   static std::vector<std::string> observation_names();

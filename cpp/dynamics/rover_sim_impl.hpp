@@ -9,7 +9,10 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <atomic>
 #include <exception>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "ernest/dynamics/ode_lcp.hpp"
@@ -39,6 +42,13 @@ inline Mat3 to_mat(const dReal* r) {  // ODE stores 3x4 row-major
 }
 
 void init_ode_once();
+/// Thrown by the error and debug handlers that init_ode_once() installs: ODE's default handlers
+/// abort the process on an internal error (e.g. "!bSafeNormalize4Fault" on a non-finite state).
+/// RoverSim::Impl::run_ode() turns it into SimulationDiverged and retires the simulator.
+class OdeInternalError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 /// Messages about the LCP that ODE sent on this thread (its message handler counts them).
 extern thread_local std::uint64_t ode_lcp_messages;
 void canonicalise_quaternion(dBodyID b);
@@ -159,6 +169,28 @@ struct RoverSim::Impl {
   }();
   Vec3 pending_force = Vec3::Zero();
   bool diverged = false;
+  // ODE failed internally (OdeInternalError): its world may be inconsistent (an exception left
+  // dWorldStep half way), so it is never stepped, reset or restored again.
+  std::string ode_failure;
+  // Held by every public method (cpp/common/exclusive_use.hpp): one thread at a time.
+  mutable std::atomic<bool> in_use{false};
+
+  /// Runs f (which calls into ODE); an ODE internal error becomes SimulationDiverged.
+  template <class F>
+  void run_ode(F&& f) {
+    if (!ode_failure.empty())
+      throw SimulationDiverged("RoverSim: ODE failed internally earlier (" + ode_failure +
+                               "); this simulator cannot be used again, create a new RoverSim");
+    try {
+      f();
+    } catch (const detail::OdeInternalError& e) {
+      ode_failure = e.what();
+      diverged = true;
+      throw SimulationDiverged(std::string("SimulationDiverged: ODE internal error (") + e.what() +
+                               ") at t = " + std::to_string(st.time) +
+                               " s; this simulator cannot be used again, create a new RoverSim");
+    }
+  }
 
   // ---- per-step working data (preallocated; the hot loop never allocates) ----
   std::array<detail::GroundContact, 4> ground{};

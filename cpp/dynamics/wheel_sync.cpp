@@ -39,12 +39,15 @@ WheelJacobian wheel_jacobian(const RoverParameters& p, double psi, double phi, i
 
 WheelSyncResult synchronise_wheels(const RoverParameters& p, double psi, double phi, double vx,
                                    double wx, double wy, double psi_dot, double phi_dot) {
+  // Physical ranges (1e200 used to pass and give infinite wheel speeds): the rates of Commands.
   const char* o = "synchronise_wheels";
-  require_finite(o, "vx", vx);
-  require_finite(o, "wx", wx);
-  require_finite(o, "wy", wy);
-  require_finite(o, "psi_dot", psi_dot);
-  require_finite(o, "phi_dot", phi_dot);
+  require_in_range(o, "psi", psi, -2.0 * M_PI, 2.0 * M_PI);
+  require_in_range(o, "phi", phi, -2.0 * M_PI, 2.0 * M_PI);
+  require_in_range(o, "vx", vx, -kMaxSyncSpeed, kMaxSyncSpeed);
+  require_in_range(o, "wx", wx, -kMaxCommandRate, kMaxCommandRate);
+  require_in_range(o, "wy", wy, -kMaxCommandRate, kMaxCommandRate);
+  require_in_range(o, "psi_dot", psi_dot, -kMaxCommandRate, kMaxCommandRate);
+  require_in_range(o, "phi_dot", phi_dot, -kMaxCommandRate, kMaxCommandRate);
   WheelSyncResult res;
   res.A.setZero();
   res.y.setZero();

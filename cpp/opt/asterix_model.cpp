@@ -95,6 +95,7 @@ void AsterixKinematics::pose_rate(double psi, double theta, double theta_rate, d
 }
 
 double AsterixKinematics::turning_radius(double theta) const {
+  require_finite("AsterixKinematics.turning_radius", "theta", theta);
   const double h = 0.5 * std::abs(theta);
   if (h == 0.0) return kInf;
   return p_.l_x * std::cos(h) / std::tan(h);

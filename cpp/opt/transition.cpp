@@ -728,6 +728,8 @@ double transition_cost(const TransitionProblem& problem, Strategy strategy,
   options.validate();
   const int dim = transition_dimension(problem, strategy, options);
   require(static_cast<int>(x.size()) == dim, "transition_cost: x has the wrong size");
+  for (std::size_t i = 0; i < x.size(); ++i)
+    require_finite("transition_cost", ("x[" + std::to_string(i) + "]").c_str(), x[i]);
   TransitionCost cost(problem, strategy, weights, options,
                       strategy == Strategy::Bezier ? 2 : options.waypoints);
   if (grad) grad->assign(dim, 0.0);
@@ -741,6 +743,8 @@ void transition_constraints(const TransitionProblem& problem, Strategy strategy,
   options.validate();
   const int dim = transition_dimension(problem, strategy, options);
   require(static_cast<int>(x.size()) == dim, "transition_constraints: x has the wrong size");
+  for (std::size_t i = 0; i < x.size(); ++i)
+    require_finite("transition_constraints", ("x[" + std::to_string(i) + "]").c_str(), x[i]);
   TransitionCost cost(problem, strategy, CostWeights{}, options,
                       strategy == Strategy::Bezier ? 2 : options.waypoints);
   values.assign(cost.constraint_count(), 0.0);

@@ -23,6 +23,9 @@ void SoilParameters::validate() const {
   require_positive(kOwner, "shear_modulus_y", shear_modulus_y);
   // theta_r <= 0 <= theta_m <= theta_f and theta_m > theta_r for every slip in [-1, 1] (eqs 14–15)
   // keep the two quadrature panels ordered and the bulldozing depth profile (eq 23) defined.
+  // a1 and b1 first: the ranges of a0 and b0 depend on them and are empty for |a1|, |b1| > 0.5.
+  require_in_range(kOwner, "a1", a1, -0.5, 0.5);
+  require_in_range(kOwner, "b1", b1, -0.5, 0.5);
   require_in_range(kOwner, "a0", a0, std::abs(a1), 1.0 - std::abs(a1));
   require_in_range(kOwner, "b0", b0, -1.0 + std::abs(b1), -std::abs(b1));
   require(a0 - b0 > std::abs(a1 - b1),

@@ -192,6 +192,7 @@ class Snapshot:
     def time(self) -> float: ...
 
 class RoverSim:
+    """One thread at a time per RoverSim: a concurrent call raises RuntimeError (no waiting)."""
     def __init__(self, params: RoverParameters, terrain: HeightMap,
                  obstacles: Sequence[BoxObstacle] = ..., options: SimOptions = ...) -> None: ...
     def reset(self, x: float, y: float, heading: float, psi: float = 0.0, phi: float = 0.0,

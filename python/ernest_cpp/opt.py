@@ -78,11 +78,11 @@ def asterix_problem(t1: float, direction: str = DIRECTIONS[0],
     """Transition between squirming and wheel-walking at time t1 of the first gait."""
     rover = rover or AsterixParameters()
     gaits = {"squirming": squirming(rover), "wheel_walking": wheel_walking(rover)}
-    try:
-        a, b = direction.split("->")
-        return TransitionProblem(rover, gaits[a], gaits[b], float(t1))
-    except (KeyError, ValueError):
-        raise ValueError(f"direction must be one of {DIRECTIONS}, got {direction!r}") from None
+    if direction not in DIRECTIONS:
+        raise ValueError(f"direction must be one of {DIRECTIONS}, got {direction!r}")
+    a, b = direction.split("->")
+    # (TransitionProblem's own ValueError names t1 with its range: not caught here)
+    return TransitionProblem(rover, gaits[a], gaits[b], float(t1))
 
 
 def plan(problem: TransitionProblem, strategy: str | Strategy = "bezier",

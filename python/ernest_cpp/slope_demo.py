@@ -31,6 +31,21 @@ def _terrain(slope_deg: float) -> D.HeightMap:
 
 
 CONTROLLERS = ("passive", "crawling")
+MAX_VX = 5.0  # [m/s]: the rolling start's limit (RoverSim.reset speed)
+
+
+def _option(name: str, lo: float, hi: float, lo_open: bool = True):
+    """argparse type: a finite float in (lo, hi] (or [lo, hi]), the error naming the option."""
+    def parse(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} = {text!r} is not a number") from None
+        if not (math.isfinite(v) and (v > lo if lo_open else v >= lo) and v <= hi):
+            raise argparse.ArgumentTypeError(
+                f"{name} = {v} is outside the allowed range {'(' if lo_open else '['}{lo}, {hi}]")
+        return v
+    return parse
 
 
 def run(controller: str, soil: str = "m90", duration: float = 60.0, vx: float = 0.2,
@@ -45,8 +60,10 @@ def run(controller: str, soil: str = "m90", duration: float = 60.0, vx: float = 
     Table 2's."""
     if controller not in CONTROLLERS:
         raise ValueError(f"controller must be one of {CONTROLLERS}, got {controller!r}")
-    if duration <= 0 or vx <= 0:
-        raise ValueError("duration and vx must be > 0")
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration = {duration} must be finite and > 0")
+    if not (math.isfinite(vx) and 0 < vx <= MAX_VX):
+        raise ValueError(f"vx = {vx} is outside the allowed range (0, {MAX_VX}] m/s")
     if gait is None:
         gait = CrawlingGaitController(speed=vx)
     params = _soil.soil_preset(soil)
@@ -194,8 +211,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--out", default="out/dynamics", help="output folder (default out/dynamics)")
     p.add_argument("--soils", default="m90,dry_sand",
                    help="comma-separated soil presets (default m90,dry_sand)")
-    p.add_argument("--duration", type=float, default=60.0, help="simulated seconds (default 60)")
-    p.add_argument("--vx", type=float, default=0.2,
+    p.add_argument("--duration", type=_option("--duration", 0.0, 1e6), default=60.0, help="simulated seconds (default 60)")
+    p.add_argument("--vx", type=_option("--vx", 0.0, MAX_VX), default=0.2,
                    help="commanded forward speed [m/s] of both controllers (default 0.2, the "
                         "crawling gait's and the evaluation's)")
     p.add_argument("--eps-slip", type=float, default=None,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any
 
 import gymnasium as gym
@@ -17,6 +18,15 @@ SCENARIO_ALIASES = {
     "slope": "slope", "bickler": "bickler", "bickler_trap": "bickler", "slope_eval": "slope_eval",
     "wheel_step": "wheel_step", "course": "course", "flat": "flat",
 }
+
+
+def _flag(name: str, value) -> bool:
+    """A boolean option: True/False (or numpy bool, 0, 1); anything else (e.g. "no", which
+    bool() reads as True) raises ValueError naming the option."""
+    if isinstance(value, (bool, np.bool_)) or (isinstance(value, numbers.Integral)
+                                                 and value in (0, 1)):
+        return bool(value)
+    raise ValueError(f"{name} = {value!r} must be a bool (True or False)")
 
 
 def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool = False,
@@ -47,12 +57,12 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
                 else float(value))
     o.scenario = sc
     o.soil = soil
-    o.passive = bool(passive)
+    o.passive = _flag("passive", passive)
     o.physics_dt = float(physics_dt)
     o.slip_force_tolerance = float(slip_force_tolerance)
     o.obstacle_substeps = int(obstacle_substeps)
     o.episode_duration = float(episode_length)
-    o.rigid_ground = bool(rigid_ground)
+    o.rigid_ground = _flag("rigid_ground", rigid_ground)
     o.eps_slip = float(eps_slip)
     o.eps_motion = float(eps_motion)
     o.fts_noise_force = float(fts_noise_force)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 import os
 
 import gymnasium as gym
@@ -11,6 +12,16 @@ from gymnasium.vector.utils import batch_space
 
 from .._core import envs as _envs
 from .core import ErnestEnv, check_reset_options
+
+
+def _check_seed(seed, name: str, room: int = 0) -> int:
+    """seed as an int in [0, 2**64 - 1 - room] (the C++ seeds are uint64), else ValueError."""
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise ValueError(f"{name} = {seed!r} must be an integer in [0, {2**64 - 1 - room}]")
+    value = int(seed)
+    if not 0 <= value <= 2**64 - 1 - room:
+        raise ValueError(f"{name} = {value} is outside the allowed range [0, {2**64 - 1 - room}]")
+    return value
 
 
 class ErnestVectorEnv(gym.vector.VectorEnv):
@@ -44,10 +55,15 @@ class ErnestVectorEnv(gym.vector.VectorEnv):
         if seed is None:
             rng = np.random.default_rng()
             seeds = [int(s) for s in rng.integers(0, 2**63 - 1, self.num_envs)]
-        elif isinstance(seed, int):
-            seeds = [seed + i for i in range(self.num_envs)]
+        elif isinstance(seed, numbers.Integral):  # int, numpy integers (not bool: an Integral too)
+            seeds = [_check_seed(seed, "seed", self.num_envs - 1) + i for i in range(self.num_envs)]
         else:
-            seeds = [int(s) for s in seed]
+            try:
+                seeds = [_check_seed(s, f"seed[{i}]") for i, s in enumerate(seed)]
+            except TypeError:
+                raise ValueError("seed must be None, an integer in [0, 2**64 - num_envs] or a "
+                                 f"sequence of {self.num_envs} integers in [0, 2**64 - 1], got "
+                                 f"{seed!r}") from None
             if len(seeds) != self.num_envs:
                 raise ValueError(f"need {self.num_envs} seeds, got {len(seeds)}")
         obs = self.core.reset(seeds)
