@@ -74,7 +74,7 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
   //     never pulls; lambda = (motion - v_n) / cfm with motion = F_z / c, cfm = 1 / c. c is the
   //     soil's damper plus h dF_z/dz (eq 32's spring at the end of the step, linearised: see
   //     prepare_ground). Guessed at 0 (the wheel leaves the soil faster than F_z / c): no row.
-  const double c = opt.soil_normal_damping + h * g.ks;
+  const double c = g.normal_damping;
   const std::int8_t normal_mode = mode_of(kRowsPerWheel * i + kNormal);
   Slot slots[2];  // x then y: with fdir1 = x the second friction row is n × x = y
   int ns = 0;
@@ -208,7 +208,7 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
         row_force[row] = to_vec(ground_fb[i].f1).dot(g.n);
         next[row] = row_force[row] > 0.0 ? kFree : kAtLo;
       } else {
-        const double total = g.fz - (opt.soil_normal_damping + h * g.ks) * vp.dot(g.n);
+        const double total = g.fz - g.normal_damping * vp.dot(g.n);
         row_force[row] = 0.0;
         outcome(row, total > 0.0 ? kFree : kAtLo);
       }

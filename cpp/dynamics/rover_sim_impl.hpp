@@ -104,7 +104,9 @@ struct GroundContact {
   // explicit share of the soil's axle torque (about `axle`), all at the slip of the attempt
   double ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0, axle_torque = 0.0;
   double fz_pressure = 0.0;  // eq 32's pressure part at the slip of the attempt [N]
-  double ks = 0.0;  // d F_z / d sinkage at the start of the step [N/m] (eq 32, pressure part)
+  // the normal row's damper [N s/m]: the soil's plus h dF_z/dz (eq 32's pressure spring at the
+  // end of the step, linearised in the sinkage)
+  double normal_damping = 0.0;
   soil::ContactState cs{};  // eq 12–32 inputs at the start of the step (Fig. 7 frame)
 };
 
@@ -127,6 +129,7 @@ struct RoverSim::Impl {
   soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
   double mu = 0.5;
   double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
+  bool obstacles_collected = false;  // step() found this step's obstacle contacts already
   double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at h
   // The tyre's along x and y on rigid ground (rover_rigid.cpp).
   std::array<double, 2> tangential_erp{}, tangential_cfm{};

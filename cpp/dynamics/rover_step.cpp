@@ -174,7 +174,8 @@ void RoverSim::Impl::prepare_ground() {
     soil::ContactState deeper = g.cs;
     const double dz = std::max(1e-5, 0.01 * dp.depth);
     deeper.sinkage += dz;
-    g.ks = std::max(0.0, (soil.split(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
+    const double ks = std::max(0.0, (soil.split(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
+    g.normal_damping = opt.soil_normal_damping + h * ks;
   }
 }
 
@@ -399,9 +400,12 @@ void RoverSim::Impl::set_step_length(double length) {
   }
 }
 
+// Collects the step's obstacle contacts (at the current step length) and says whether there are
+// any; step_once() then uses them instead of colliding again.
 bool RoverSim::Impl::touching_obstacles() {
   if (obstacle_geoms.empty()) return false;
   prepare_obstacles();
+  obstacles_collected = true;
   return n_obstacle_contacts > 0;
 }
 
@@ -410,12 +414,14 @@ bool RoverSim::Impl::touching_obstacles() {
 // A force added with add_force() acts over the whole step.
 void RoverSim::Impl::step() {
   init_ode_once();
-  const int n = opt.obstacle_substeps > 1 && !diverged && touching_obstacles() ? opt.obstacle_substeps : 1;
-  if (n == 1) {
-    if (h != opt.dt) set_step_length(opt.dt);
+  obstacles_collected = false;
+  const int n = opt.obstacle_substeps;
+  if (h != opt.dt) set_step_length(opt.dt);
+  if (n == 1 || diverged || !touching_obstacles()) {
     step_once();
     return;
   }
+  obstacles_collected = false;  // collected with the full step's compliance: again per substep
   set_step_length(opt.dt / n);
   const Vec3 force = pending_force;
   for (int k = 0; k < n; ++k) {
@@ -439,7 +445,8 @@ void RoverSim::Impl::step_once() {
   prepare_actuators(psi, phi);
   prepare_ground();
   if (opt.ground == GroundType::Rigid) prepare_rigid();
-  prepare_obstacles();
+  if (!obstacles_collected) prepare_obstacles();
+  obstacles_collected = false;
   base_force[kChassis] += pending_force;
   pending_force.setZero();
   save_bodies();
