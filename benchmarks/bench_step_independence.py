@@ -17,7 +17,8 @@ range 5 pp) at a fixed step. A single episode is then a sample, not a quantity t
 2 pp, whatever the integrator. For the policy's rows the script therefore also runs an ensemble of
 `--learned-ensemble` episodes (default 16) whose force-sensor readings carry that perturbation
 (`--perturb`, N; torques a tenth of it in N m), the same seeds at both steps, and prints the
-means, their standard errors and the spread at the default step. Such a row is within the targets
+means (on the courses with boxes or rocks the seed also draws their friction, 0.5-0.9 as in seed
+004 Table 3, so there the spread is the friction's as well as the perturbation's), their standard errors and the spread at the default step. Such a row is within the targets
 when its single noise-free episodes are, or when the ensemble means are ("ens" in the last
 column). Where the outcome is bimodal (the policy crosses the Bickler trap or stalls, decided by
 the perturbation), 16 episodes cannot resolve 2 pp; the row then says "n.s." when the means'
@@ -137,7 +138,7 @@ def main(argv=None) -> int:
                              f"(CoT {single[0]['cost_of_transport']:.3f}) at dt, "
                              f"{100 * single[1]['travel_reduction']:.1f} % ({single[1]['cost_of_transport']:.3f}) "
                              f"at dt/4; the {n} perturbed episodes at dt span {min(tr):.1f}..{max(tr):.1f} % "
-                             f"(SD {statistics.stdev(tr):.2f} pp) with a {1e3 * args.perturb:g} mN perturbation")
+                             f"(SD {statistics.stdev(tr):.2f} pp; seeds 0..{n - 1}, {1e3 * args.perturb:g} mN perturbation)")
                 print(f"{line}  ({time.perf_counter() - t0:.1f} s)\n{notes[-1]}", flush=True)
                 continue
             for seed in args.seeds:
