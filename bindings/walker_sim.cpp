@@ -4,6 +4,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <memory>
+
 #include "bindings.hpp"
 #include "ernest/walker_sim/gait_execution.hpp"
 #include "ernest/walker_sim/sag_compensation.hpp"

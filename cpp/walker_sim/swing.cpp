@@ -95,26 +95,26 @@ ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::ve
   std::vector<int> phase;
   ExecutionTrace out;
   out.min_rock_clearance = out.min_ground_clearance = kInf;
-  auto record = [&](int seg) {
+  // in_air: the transfer, from arriving at waypoint 1 to leaving waypoint last - 1
+  auto record = [&](int seg, bool in_air) {
     time.push_back(sim.time() - start);
     rock.push_back(leg >= 0 ? sim.rock_clearance(leg) : kInf);
     ground.push_back(leg >= 0 ? sim.ground_clearance(leg) : kInf);
     height.push_back(sim.body_pose().translation().z());
     phase.push_back(seg);
     out.min_rock_clearance = std::min(out.min_rock_clearance, rock.back());
-    // the transfer: from arriving at waypoint 1 to leaving waypoint last - 1
-    if (seg >= 1 && seg < last - 1) out.min_ground_clearance = std::min(out.min_ground_clearance, ground.back());
+    if (in_air) out.min_ground_clearance = std::min(out.min_ground_clearance, ground.back());
   };
-  auto pause = [&](int waypoint, int seg) {
+  auto pause = [&](int waypoint) {
     target = path[waypoint];
     rate.setZero();
     for (int s = 0, steps = static_cast<int>(std::ceil(options.pause / dt - 1e-9)); s < steps; ++s) {
       sim.step(target, rate);
-      record(seg);
+      record(waypoint - 1, waypoint >= 1 && waypoint <= last - 1);
     }
     out.waypoint_body.push_back(sim.body_pose());
   };
-  pause(0, -1);
+  pause(0);
   for (int w = 0; w < last; ++w) {
     const Eigen::MatrixXd delta = path[w + 1] - path[w];
     const double duration = std::max(dt, delta.cwiseAbs().maxCoeff() / options.joint_speed);
@@ -123,10 +123,9 @@ ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::ve
     for (int s = 1; s <= steps; ++s) {
       target = path[w] + (static_cast<double>(s) / steps) * delta;
       sim.step(target, rate);
-      record(w);
+      record(w, w >= 1 && w <= last - 2);
     }
-    // pausing at waypoint w + 1 belongs to the next segment (the transfer starts at waypoint 1)
-    pause(w + 1, std::min(w + 1, std::max(last - 1, 0)));
+    pause(w + 1);
   }
   const auto n = static_cast<Eigen::Index>(time.size());
   out.time = Eigen::Map<const Eigen::VectorXd>(time.data(), n);

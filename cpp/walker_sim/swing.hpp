@@ -37,7 +37,9 @@ struct ExecutionTrace {
   Eigen::VectorXd rock_clearance;    ///< swing wheel to the nearest rock [m]
   Eigen::VectorXd ground_clearance;  ///< swing wheel's lowest point over z = 0 [m]
   Eigen::VectorXd body_height;       ///< chassis origin z [m]
-  Eigen::VectorXi phase;             ///< segment index (waypoint i -> i + 1); -1 while pausing at the start
+  /// Segment index: i while moving from waypoint i to i + 1 and while pausing at waypoint i + 1
+  /// (-1 in the first pause).
+  Eigen::VectorXi phase;
   double min_rock_clearance = 0.0;   ///< over the whole motion [m] (< 0: the wheel hit a rock)
   /// Over the transfer (after the first lift waypoint is reached, before the last one is left),
   /// when the wheel should be in the air [m].

@@ -127,6 +127,7 @@ struct WalkerSim::Impl {
   std::vector<Vec3> wheel_local, axle_local;  // in the foot link's ODE frame
   std::vector<dGeomID> wheel_geoms, rock_geoms;
   std::vector<dJointFeedback> feedback;
+  std::vector<char> on_ground;  // wheel k had a ground contact in the last step
   Eigen::VectorXd loads;
   double t = 0.0;
   bool broken = false;
@@ -203,6 +204,7 @@ struct WalkerSim::Impl {
     }
     q0 = q;
     feedback.resize(legs);
+    on_ground.assign(legs, 0);
     loads.setZero(legs);
   }
 
@@ -228,7 +230,7 @@ struct WalkerSim::Impl {
     if (fb) dJointSetFeedback(j, fb);
   }
 
-  void step(const Eigen::MatrixXd& target, const Eigen::MatrixXd& rate) {
+  void step(const Eigen::Ref<const Eigen::MatrixXd>& target, const Eigen::Ref<const Eigen::MatrixXd>& rate) {
     if (broken) throw WalkerSimDiverged("WalkerSim: the simulation diverged earlier and cannot continue");
     const walker::WalkerParameters& p = model.params();
     for (int k = 0; k < legs; ++k)
@@ -239,13 +241,13 @@ struct WalkerSim::Impl {
         dJointSetHingeParam(hinges[k * n + i], dParamVel, v);
       }
     dJointGroupEmpty(contacts);
-    std::vector<bool> on_ground(legs, false);
     for (int k = 0; k < legs; ++k) {
+      on_ground[k] = 0;
       const dBodyID foot = link(k, n - 1);
       const Vec3 low = lowest_rim_point(wheel_centre(k), wheel_axle(k), p.wheel_radius);
       if (low.z() < 0.0) {
         add_contact(foot, low, Vec3::UnitZ(), -low.z(), o.contact_stiffness, o.contact_damping, &feedback[k]);
-        on_ground[k] = true;
+        on_ground[k] = 1;
       }
       for (dGeomID rg : rock_geoms) {
         dContactGeom cg[4];

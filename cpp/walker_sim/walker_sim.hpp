@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "ernest/walker/walker_model.hpp"

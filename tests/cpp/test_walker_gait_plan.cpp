@@ -32,14 +32,99 @@ TEST(WalkerGaitPlan, BecomesPeriodicAfterTheSecondCycleWithEveryStanceStable) {
   const WalkerModel m(sdm_b_parameters());
   GaitPlannerOptions o;
   o.cycles = 4;
-  o.max_step = 0.8;
+  // Longer than the front leg can step from the standard stance (0.752 m: reach), so the first
+  // two cycles are a transient.
+  o.max_step = 0.78;
   const GaitPlan p = plan_gait(m, m.standard_body_pose().translation(), m.standard_configuration(), o);
-  std::printf("steps\n");
-  for (int c = 0; c < o.cycles; ++c) {
-    for (int i = 0; i < 6; ++i) std::printf(" %.4f", p.step_lengths(c, i));
-    std::printf("   shifts");
-    for (int i = 0; i < 6; ++i) std::printf(" %.4f", p.shift_lengths(c, i));
-    std::printf("\n");
+  ASSERT_EQ(p.events.size(), 48u);
+  ASSERT_EQ(p.step_lengths.rows(), 4);
+  // §5.3.1: "After the second gait cycle ... all the body shifts are of equal length, and so are
+  // the steps": in cycles 3 and 4 every step is the same (to the search's 0.1 mm) and every shift
+  // a sixth of it (the body follows the feet) ...
+  const double tol = 2.0 * o.search_tolerance;
+  for (int c = 2; c < 4; ++c)
+    for (int i = 0; i < 6; ++i) {
+      EXPECT_NEAR(p.step_lengths(c, i), o.max_step, tol) << c << " " << i;
+      EXPECT_NEAR(p.shift_lengths(c, i), o.max_step / 6.0, tol) << c << " " << i;
+    }
+  // ... while in the first two the front leg's step is still limited by its reach (successive IK).
+  EXPECT_LT(p.step_lengths(0, 0), o.max_step - 0.02);
+  EXPECT_LT(p.step_lengths(1, 0), o.max_step - 0.002);
+  EXPECT_GT(p.step_lengths(1, 0), p.step_lengths(0, 0) + 0.01);
+  // "Largest step the IK allows", checked with an independent multi-start IK (more seeds): the
+  // reported goal is reachable and 1 cm further is not.
+  const GaitEvent& first = p.events[0];
+  IkOptions wide;
+  wide.seeds = 64;
+  LegIk ik(m, wide);
+  const Eigen::Vector3d body = first.body_before;
+  for (double extra : {0.0, 0.01}) {
+    const Eigen::Vector3d goal = first.feet_after.col(0) + Eigen::Vector3d(extra, 0.0, 0.0);
+    const int reachable = ik.solve(0, upright_foot_pose(m, goal - body, 0.0), first.q_before.col(0)).status ==
+                                  IkStatus::kSolved &&
+                          ik.solve(0, upright_foot_pose(m, goal + Eigen::Vector3d(0, 0, o.lift_height) - body, 0.0),
+                                   first.q_before.col(0)).status == IkStatus::kSolved;
+    EXPECT_EQ(reachable, extra == 0.0) << "extra " << extra;
   }
-  std::printf("ik tests %d, %.3f s\n", p.ik_tests, p.seconds);
+  // Every event, recomputed here from its configurations with cpp/statics: the wheels are where
+  // the plan says, only the stepping foot moves (along the heading), and every stance during a
+  // step (the leg at the waypoint above its start and above its goal) has SSM > 0.
+  double min_ssm = 1e9;
+  for (const GaitEvent& e : p.events) {
+    Eigen::Isometry3d b = Eigen::Isometry3d::Identity();
+    b.translation() = e.body_after;
+    EXPECT_LT((m.contact_points(b, e.q_after) - e.feet_after).cwiseAbs().maxCoeff(), 1e-6);
+    const Eigen::Matrix3Xd moved = e.feet_after - e.feet_before;
+    if (e.kind == GaitEvent::kShift) {
+      EXPECT_LT(moved.cwiseAbs().maxCoeff(), 1e-12);
+      EXPECT_NEAR((e.body_after - e.body_before).x(), e.length, 1e-12);
+      // the body ends over the feet's centroid along the travel (no leg limited the shift)
+      EXPECT_NEAR(e.body_after.x(), e.feet_after.row(0).mean(), tol);
+      continue;
+    }
+    EXPECT_NEAR(moved(0, e.leg), e.length, 1e-12);
+    EXPECT_LT(moved.cwiseAbs().sum() - e.length, 1e-12);
+    b.translation() = e.body_before;
+    for (const Eigen::VectorXd* ql : {&e.q_lift_start, &e.q_lift_goal}) {
+      Eigen::MatrixXd q = e.q_before;
+      q.col(e.leg) = *ql;
+      Eigen::Matrix3Xd loaded(3, 5);
+      for (int k = 0, c = 0; k < 6; ++k)
+        if (k != e.leg) loaded.col(c++) = e.feet_before.col(k);
+      const double ssm = ernest::statics::stability_margins(loaded, m.center_of_mass(b, q),
+                                                            Eigen::Vector3d(0, 0, -9.81)).ssm;
+      EXPECT_GT(ssm, 0.0);
+      EXPECT_GE(ssm, e.support_margin - 1e-9);
+      min_ssm = std::min(min_ssm, ssm);
+    }
+  }
+  // The body travelled what the feet did: one step length per cycle in the periodic regime.
+  const GaitEvent& last = p.events.back();
+  EXPECT_NEAR(last.body_after.x() - p.events[35].body_after.x(), o.max_step, tol);
+  std::printf("step lengths cycle 1: %.4f ...; periodic %.4f m, shifts %.4f m; min SSM %.3f m; %d IK tests, %.3f s\n",
+              p.step_lengths(0, 0), p.step_lengths(1, 0), p.shift_lengths(1, 0), min_ssm, p.ik_tests, p.seconds);
+}
+
+TEST(WalkerGaitPlan, InvalidOptionsAndInputNameTheField) {
+  const WalkerModel m(sdm_b_parameters());
+  const Eigen::Vector3d body = m.standard_body_pose().translation();
+  GaitPlannerOptions o;
+  o.max_step = std::nan("");
+  EXPECT_NE(invalid_argument_message([&] { plan_gait(m, body, m.standard_configuration(), o); }).find("max_step"),
+            std::string::npos);
+  o = GaitPlannerOptions{};
+  o.sequence = {0, 1, 2, 3, 4, 4};
+  EXPECT_NE(invalid_argument_message([&] { o.validate(6); }).find("sequence"), std::string::npos);
+  o = GaitPlannerOptions{};
+  o.cycles = 0;
+  EXPECT_NE(invalid_argument_message([&] { o.validate(6); }).find("cycles"), std::string::npos);
+  o = GaitPlannerOptions{};
+  EXPECT_NE(invalid_argument_message([&] {
+              plan_gait(m, Eigen::Vector3d(0, 0, std::nan("")), m.standard_configuration(), o);
+            }).find("body_position"),
+            std::string::npos);
+  // The wheels must start on the ground.
+  EXPECT_NE(invalid_argument_message([&] { plan_gait(m, body + Eigen::Vector3d(0, 0, 0.1), m.standard_configuration(), o); })
+                .find("ground"),
+            std::string::npos);
 }
