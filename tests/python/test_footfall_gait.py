@@ -16,7 +16,7 @@ def sdm_b():
 
 
 def test_demo_writes_the_figure_and_reports_the_lesson(tmp_path):
-    r = footfall_gait.demo(tmp_path, cycles=3)
+    r = footfall_gait.demo(tmp_path, cycles=4)
     assert (tmp_path / "footfall_gait.png").stat().st_size > 10_000
     assert r["sequence"] == [0, 1, 5, 2, 4, 3]
     # both plans keep the requested clearance on paper; only the compensated one keeps it executed
