@@ -64,21 +64,22 @@ def plot(plan: W.GaitPlan, sag: WS.SagScenarioResult, path: Path) -> None:
     a.set_xlabel("x [m] (travel)")
     a.set_ylabel("y [m]")
     a.set_title("(a) reverse-wave skeleton gait (§5.3.1): steps and body shifts")
-    a.legend(fontsize=7, loc="upper left", ncol=2)
+    a.set_ylim(-2.6, 2.9)
+    a.legend(fontsize=7, loc="upper center", ncol=4)
     # (b) step and shift lengths per cycle
     b = ax[0, 1]
     s, h = np.asarray(plan.step_lengths), np.asarray(plan.shift_lengths)
     n = s.shape[1]
-    x = np.arange(s.size)
-    b.bar(x - 0.2, s.ravel(), 0.4, label="step of the leg")
-    b.bar(x + 0.2, h.ravel(), 0.4, label="body shift after it")
+    x = np.arange(s.size) + 1
+    b.plot(x, 100 * s.ravel(), "o-", color="tab:blue", label="step of the leg [cm]")
+    b.plot(x, 600 * h.ravel(), "s--", color="tab:orange", ms=4, label="6 × body shift after it [cm]")
     for c in range(1, s.shape[0]):
-        b.axvline(c * n - 0.5, color="0.6", ls=":")
-    b.set_xlabel("step in the gait (6 a cycle)")
-    b.set_ylabel("length [m]")
+        b.axvline(c * n + 0.5, color="0.6", ls=":")
+    b.set_xlabel(f"step in the gait ({n} a cycle; order {plan.sequence})")
+    b.set_ylabel("length [cm]")
     err = f"{1000 * periodicity(plan):.2g} mm" if s.shape[0] > 3 else "n/a"
-    b.set_title(f"(b) lengths per cycle; repeat after cycle 2 to {err}")
-    b.legend(fontsize=8)
+    b.set_title(f"(b) front leg reach-limited at first; repeats after cycle 2 to {err}")
+    b.legend(fontsize=8, loc="lower right")
     # (c) clearance traces
     c = ax[1, 0]
     for run, plan_, name, col in ((sag.rigid_run, sag.rigid, "rigid plan", "tab:red"),
@@ -87,7 +88,7 @@ def plot(plan: W.GaitPlan, sag: WS.SagScenarioResult, path: Path) -> None:
                label=f"{name}: lift {100 * plan_.lift_height:.1f} cm, on paper "
                      f"{100 * plan_.planned_clearance:.1f} cm, executed {100 * run.min_rock_clearance:.1f} cm")
     c.axhline(0, color="k", lw=0.8)
-    c.set_ylim(-5, 40)
+    c.set_ylim(-3, 15)
     c.set_xlabel("time [s]")
     c.set_ylabel("swing wheel to rock [cm]")
     c.set_title("(c) the same swing planner, rigid vs sagged pose, executed in ODE (§4.1)")
