@@ -64,3 +64,15 @@ def test_bad_input_is_a_value_error(sdm_b):
     rock.half_extents = [0.1, -0.1, 0.1]
     with pytest.raises(ValueError, match="half_extents"):
         rock.validate()
+
+
+def test_the_lesson_holds_on_t12_too():
+    # T12 (seven joints a leg, 2.15 m, heavier): its chassis sags 5.2 cm on six wheels (m g / 6 k)
+    # and more with a leg up; the rigid plan hits the rock, the compensated one clears it.
+    t12 = W.WalkerModel(W.t12_parameters())
+    r = WS.run_sag_scenario(t12, WS.SagScenarioOptions())
+    weight = t12.params.total_mass() * t12.params.gravity
+    np.testing.assert_allclose(np.asarray(r.rigid_corners) - np.asarray(r.measured_six_corners),
+                               weight / (6 * WS.WalkerSimOptions().contact_stiffness), atol=5e-4)
+    assert r.rigid_run.min_rock_clearance < 0.0 < r.compensated_run.min_rock_clearance
+    assert r.lifted_error < 0.003
