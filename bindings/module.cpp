@@ -26,6 +26,9 @@ PYBIND11_MODULE(_core, m) {
   auto walker = m.def_submodule(
       "walker", "ATHLETE-class wheel-on-leg walker: kinematics, IK, joint torques (seed 003)");
   ernest::bindings::bind_walker(walker);
+  auto walker_sim = m.def_submodule(
+      "walker_sim", "The walker in ODE: swing execution, clearance, sag compensation (seed 003 §4.1)");
+  ernest::bindings::bind_walker_sim(walker_sim);
   auto perception = m.def_submodule(
       "perception", "Simulated stereo cameras, OpenCV stereo and the elevation map (seed 004 §2.4)");
   ernest::bindings::bind_perception(perception);

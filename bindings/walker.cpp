@@ -23,8 +23,6 @@ namespace ernest::bindings {
 
 using namespace ernest::walker;
 
-namespace {
-
 // A 4 × 4 homogeneous transform from Python, checked (finite, rigid, last row 0 0 0 1).
 Eigen::Isometry3d to_isometry(const Eigen::Matrix4d& t, const char* field) {
   if (!t.allFinite()) throw std::invalid_argument(std::string(field) + " is not finite");
@@ -38,6 +36,8 @@ Eigen::Isometry3d to_isometry(const Eigen::Matrix4d& t, const char* field) {
   iso.translation() = t.topRightCorner<3, 1>();
   return iso;
 }
+
+namespace {
 
 Eigen::Matrix4d to_matrix(const Eigen::Isometry3d& t) { return t.matrix(); }
 
@@ -346,6 +346,7 @@ void bind_walker(py::module_& m) {
   m.def("optimise_sway_gait", &optimise_sway_gait, "model"_a, "options"_a = SwayGaitOptions{},
         py::call_guard<py::gil_scoped_release>(),
         "Reference gait and the sway gait maximising the margin to saturation at every step.");
+  bind_walker_gait(m);
 }
 
 }  // namespace ernest::bindings

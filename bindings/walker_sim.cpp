@@ -1,0 +1,177 @@
+// Python bindings of cpp/walker_sim: the walker in ODE, swing execution and the sag-compensation
+// scenario (seed 003 §4.1, §5.1). Argument names equal the C++ names; poses are 4 × 4 matrices.
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+
+#include "bindings.hpp"
+#include "ernest/walker_sim/gait_execution.hpp"
+#include "ernest/walker_sim/sag_compensation.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace ernest::bindings {
+
+using namespace ernest::walker_sim;
+
+namespace {
+Eigen::Matrix4d mat(const Eigen::Isometry3d& t) { return t.matrix(); }
+}  // namespace
+
+void bind_walker_sim(py::module_& m) {
+  py::register_exception<WalkerSimDiverged>(m, "WalkerSimDiverged", PyExc_RuntimeError);
+
+  py::class_<Rock>(m, "Rock", "A box rock on the ground plane, yawed about the vertical.")
+      .def(py::init<>())
+      .def_readwrite("centre", &Rock::centre, "world [m]")
+      .def_readwrite("half_extents", &Rock::half_extents, "[m]")
+      .def_readwrite("yaw", &Rock::yaw, "[rad]")
+      .def("validate", &Rock::validate, "Raise ValueError naming the first invalid field.");
+
+  py::class_<WalkerSimOptions>(m, "WalkerSimOptions",
+                               "ODE walker: step, wheel springs (seed 003 eq 3 via contact ERP/CFM), "
+                               "joint position control through hinge motors.")
+      .def(py::init<>())
+      .def_readwrite("dt", &WalkerSimOptions::dt, "[s]")
+      .def_readwrite("contact_stiffness", &WalkerSimOptions::contact_stiffness, "k_zz per wheel [N/m]")
+      .def_readwrite("contact_damping", &WalkerSimOptions::contact_damping, "[N s/m]")
+      .def_readwrite("friction", &WalkerSimOptions::friction, "Coulomb coefficient")
+      .def_readwrite("rock_stiffness", &WalkerSimOptions::rock_stiffness, "[N/m]")
+      .def_readwrite("rock_damping", &WalkerSimOptions::rock_damping, "[N s/m]")
+      .def_readwrite("position_gain", &WalkerSimOptions::position_gain, "[1/s]")
+      .def_readwrite("max_joint_rate", &WalkerSimOptions::max_joint_rate, "[rad/s]")
+      .def_readwrite("torque_scale", &WalkerSimOptions::torque_scale, "motor limit / torque limit")
+      .def_readwrite("min_link_mass", &WalkerSimOptions::min_link_mass, "[kg]")
+      .def("validate", &WalkerSimOptions::validate, "Raise ValueError naming the first invalid field.");
+
+  py::class_<WalkerSim>(m, "WalkerSim",
+                        "The walker in ODE over flat ground with box rocks. Not thread-safe.")
+      .def(py::init([](const walker::WalkerModel& model, const Eigen::Matrix4d& body, const Eigen::MatrixXd& q,
+                       const std::vector<Rock>& rocks, const WalkerSimOptions& options) {
+             return std::make_unique<WalkerSim>(model, to_isometry(body, "body"), q, rocks, options);
+           }),
+           "model"_a, "body"_a, "q"_a, "rocks"_a = std::vector<Rock>{}, "options"_a = WalkerSimOptions{},
+           py::keep_alive<1, 2>(), "Build the robot at body pose `body` and configuration q (joints × legs).")
+      .def_property_readonly("options", &WalkerSim::options)
+      .def_property_readonly("rocks", &WalkerSim::rocks)
+      .def_property_readonly("time", &WalkerSim::time, "[s]")
+      .def("step", &WalkerSim::step, "q_target"_a, "rate"_a = Eigen::MatrixXd(),
+           py::call_guard<py::gil_scoped_release>(),
+           "One physics step towards q_target with feed-forward joint rates; raises WalkerSimDiverged.")
+      .def("hold", &WalkerSim::hold, "q_target"_a, "seconds"_a, py::call_guard<py::gil_scoped_release>(),
+           "Hold the targets for `seconds`.")
+      .def("body_pose", [](const WalkerSim& s) { return mat(s.body_pose()); }, "Chassis frame, 4 × 4.")
+      .def("joint_angles", &WalkerSim::joint_angles, "Measured joints × legs [rad].")
+      .def("wheel_centres", &WalkerSim::wheel_centres, "3 × legs [m].")
+      .def("wheel_axles", &WalkerSim::wheel_axles, "3 × legs.")
+      .def("wheel_loads", &WalkerSim::wheel_loads, "Normal force of each wheel's spring [N].")
+      .def("rock_clearance", &WalkerSim::rock_clearance, "leg"_a, "Wheel to nearest rock [m] (< 0 overlap).")
+      .def("ground_clearance", &WalkerSim::ground_clearance, "leg"_a, "Wheel's lowest point over z = 0 [m].");
+
+  m.def("wheel_rock_clearance", &wheel_rock_clearance, "centre"_a, "axle"_a, "radius"_a, "width"_a, "rock"_a,
+        "Signed distance of a cylindrical wheel to a box rock [m] (FCL).");
+  m.def(
+      "swing_path",
+      [](const walker::WalkerModel& model, const Eigen::Matrix4d& body, int leg, const Eigen::VectorXd& q_start,
+         const Eigen::Vector3d& goal, double lift_height) {
+        return swing_path(model, to_isometry(body, "body"), leg, q_start, goal, lift_height);
+      },
+      "model"_a, "body"_a, "leg"_a, "q_start"_a, "goal"_a, "lift_height"_a,
+      "Joint waypoints: start, above start, above goal, goal (IK with the body at `body`).");
+  m.def(
+      "planned_clearance",
+      [](const walker::WalkerModel& model, const Eigen::Matrix4d& body, int leg,
+         const std::vector<Eigen::VectorXd>& path, const std::vector<Rock>& rocks, int samples) {
+        return planned_clearance(model, to_isometry(body, "body"), leg, path, rocks, samples);
+      },
+      "model"_a, "body"_a, "leg"_a, "path"_a, "rocks"_a, "samples"_a = 40,
+      "Smallest wheel-to-rock clearance along the joint path with the body held at `body` [m].");
+
+  py::class_<ExecutionOptions>(m, "ExecutionOptions", "Joint-path execution: speed and pauses.")
+      .def(py::init<>())
+      .def_readwrite("joint_speed", &ExecutionOptions::joint_speed, "[rad/s]")
+      .def_readwrite("pause", &ExecutionOptions::pause, "hold at each waypoint [s]")
+      .def("validate", &ExecutionOptions::validate, "Raise ValueError naming the first invalid field.");
+
+  py::class_<ExecutionTrace>(m, "ExecutionTrace", "What the swing wheel did in the simulator.")
+      .def_readonly("time", &ExecutionTrace::time, "[s]")
+      .def_readonly("rock_clearance", &ExecutionTrace::rock_clearance, "[m]")
+      .def_readonly("ground_clearance", &ExecutionTrace::ground_clearance, "[m]")
+      .def_readonly("body_height", &ExecutionTrace::body_height, "[m]")
+      .def_readonly("phase", &ExecutionTrace::phase, "segment index, -1 in the first pause")
+      .def_readonly("min_rock_clearance", &ExecutionTrace::min_rock_clearance, "[m] (< 0: hit)")
+      .def_readonly("min_ground_clearance", &ExecutionTrace::min_ground_clearance, "during the transfer [m]")
+      .def_property_readonly("waypoint_body",
+                             [](const ExecutionTrace& t) {
+                               std::vector<Eigen::Matrix4d> out;
+                               for (const auto& b : t.waypoint_body) out.push_back(b.matrix());
+                               return out;
+                             }, "body pose after each waypoint's pause (4 × 4)")
+      .def_readonly("final_q", &ExecutionTrace::final_q)
+      .def_readonly("simulated_seconds", &ExecutionTrace::simulated_seconds)
+      .def_readonly("wall_seconds", &ExecutionTrace::wall_seconds);
+  m.def("execute_joint_path", &execute_joint_path, "sim"_a, "leg"_a, "stance"_a, "path"_a,
+        "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "Execute a joint path of `leg` (other legs held at `stance`) and trace its clearances.");
+
+  m.def("execute_configuration_path", &execute_configuration_path, "sim"_a, "leg"_a, "path"_a,
+        "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "Execute whole-robot configurations (every leg at once); trace wheel `leg` (-1: none).");
+
+  py::class_<GaitExecution>(m, "GaitExecution", "One executed gait cycle.")
+      .def_readonly("steps", &GaitExecution::steps)
+      .def_readonly("shifts", &GaitExecution::shifts)
+      .def_readonly("min_ground_clearance", &GaitExecution::min_ground_clearance, "swing wheels [m]")
+      .def_readonly("body_start", &GaitExecution::body_start, "[m]")
+      .def_readonly("body_end", &GaitExecution::body_end, "[m]")
+      .def_readonly("planned_advance", &GaitExecution::planned_advance, "[m]")
+      .def_readonly("simulated_seconds", &GaitExecution::simulated_seconds)
+      .def_readonly("wall_seconds", &GaitExecution::wall_seconds);
+  m.def("execute_gait_cycle", &execute_gait_cycle, "sim"_a, "plan"_a, "cycle"_a, "options"_a = ExecutionOptions{},
+        py::call_guard<py::gil_scoped_release>(),
+        "Execute cycle `cycle` of a walker.GaitPlan (steps through the compliance waypoints, shifts).");
+
+  py::class_<SagScenarioOptions>(m, "SagScenarioOptions", "Seed 003 §4.1 rigid vs sag-compensated swing.")
+      .def(py::init<>())
+      .def_readwrite("leg", &SagScenarioOptions::leg)
+      .def_readwrite("step", &SagScenarioOptions::step, "wheel step in the body frame [m]")
+      .def_readwrite("rock_half_extents", &SagScenarioOptions::rock_half_extents, "[m]")
+      .def_readwrite("planned_clearance", &SagScenarioOptions::planned_clearance, "on paper [m]")
+      .def_readwrite("min_lift", &SagScenarioOptions::min_lift, "[m]")
+      .def_readwrite("lift_resolution", &SagScenarioOptions::lift_resolution, "[m]")
+      .def_readwrite("tangential_ratio", &SagScenarioOptions::tangential_ratio, "k_xx / k_zz of the sag model")
+      .def_readwrite("settle_time", &SagScenarioOptions::settle_time, "[s]")
+      .def_readwrite("sim", &SagScenarioOptions::sim)
+      .def_readwrite("execution", &SagScenarioOptions::execution)
+      .def("validate", &SagScenarioOptions::validate, "Raise ValueError naming the first invalid field.");
+
+  py::class_<SwingPlan>(m, "SwingPlan", "A swing plan and the body pose it assumes.")
+      .def_property_readonly("assumed_body", [](const SwingPlan& p) { return mat(p.assumed_body); })
+      .def_readonly("path", &SwingPlan::path)
+      .def_readonly("lift_height", &SwingPlan::lift_height, "[m]")
+      .def_readonly("planned_clearance", &SwingPlan::planned_clearance, "[m]");
+
+  py::class_<SagScenarioResult>(m, "SagScenarioResult", "Rigid and compensated plans, their runs, sag check.")
+      .def_readonly("rocks", &SagScenarioResult::rocks)
+      .def_readonly("start", &SagScenarioResult::start)
+      .def_readonly("goal", &SagScenarioResult::goal)
+      .def_readonly("rigid", &SagScenarioResult::rigid)
+      .def_readonly("compensated", &SagScenarioResult::compensated)
+      .def_readonly("rigid_run", &SagScenarioResult::rigid_run)
+      .def_readonly("compensated_run", &SagScenarioResult::compensated_run)
+      .def_readonly("rigid_corners", &SagScenarioResult::rigid_corners, "hip-mount heights, no sag [m]")
+      .def_readonly("predicted_six_corners", &SagScenarioResult::predicted_six_corners, "[m]")
+      .def_readonly("measured_six_corners", &SagScenarioResult::measured_six_corners, "[m]")
+      .def_readonly("predicted_lifted_corners", &SagScenarioResult::predicted_lifted_corners, "[m]")
+      .def_readonly("measured_lifted_corners", &SagScenarioResult::measured_lifted_corners, "[m]")
+      .def_readonly("six_error", &SagScenarioResult::six_error, "[m]")
+      .def_readonly("lifted_error", &SagScenarioResult::lifted_error, "[m]");
+  m.def("run_sag_scenario", &run_sag_scenario, "model"_a, "options"_a = SagScenarioOptions{},
+        py::call_guard<py::gil_scoped_release>(),
+        "Plan a swing over a rock against the rigid and the sagged pose, execute both in ODE.");
+}
+
+}  // namespace ernest::bindings
