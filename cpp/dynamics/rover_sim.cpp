@@ -391,6 +391,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   row_mode_before.fill(kFree);
   alternating = false;
   rigid_deflection.fill(Vec3::Zero());
+  obstacle_mode.fill(kFree);
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);
@@ -546,6 +547,7 @@ Snapshot RoverSim::snapshot() const {
   s.alternating = impl_->alternating;
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < 3; ++k) s.rigid_deflection[i][k] = impl_->rigid_deflection[i][k];
+  s.obstacle_mode = impl_->obstacle_mode;
   impl_->lcp.save(s.solver_patterns);
   s.valid = true;
   return s;
@@ -578,6 +580,9 @@ void RoverSim::restore(const Snapshot& s) {
   impl_->alternating = s.alternating;
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < 3; ++k) impl_->rigid_deflection[i][k] = s.rigid_deflection[i][k];
+  for (std::int8_t m : s.obstacle_mode)
+    require(m == kFree || m == kBounded, "RoverSim.restore: corrupt snapshot (obstacle_mode)");
+  impl_->obstacle_mode = s.obstacle_mode;
   impl_->pending_force.setZero();
   impl_->diverged = false;
   impl_->start_current = false;
