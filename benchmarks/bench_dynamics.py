@@ -26,7 +26,7 @@ import sys
 import numpy as np
 
 from ernest_cpp import dynamics as D
-from bench_util import median_us
+from bench_util import median_us, rolling_rover
 
 SPEED = 0.15  # [m/s]
 # Scenario name -> number of rocks. The rocks are D.rock_field(n, seed=7, length=2, x0=0.8): box
@@ -98,13 +98,7 @@ def mjcf(p: D.RoverParameters, dt: float, boxes) -> str:
 
 def ours(boxes, substeps: int):
     """Our rover on M90 with these rocks, rolling at SPEED after 50 steps: (sim, start snapshot)."""
-    o = D.make_options("soil", friction=0.8)
-    o.obstacle_substeps = substeps
-    sim = D.make_sim(obstacles=boxes, options=o)
-    sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, SPEED)
-    c = D.Commands()
-    c.wheel_speed = [SPEED / sim.parameters.wheel_radius] * 4
-    sim.set_commands(c)
+    sim = rolling_rover(boxes, SPEED, substeps)
     sim.step_n(50)
     return sim, sim.snapshot()
 

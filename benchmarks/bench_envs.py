@@ -20,6 +20,7 @@ import numpy as np
 
 import ernest_cpp.envs as E
 from ernest_cpp import dynamics as D
+from bench_util import rolling_rover
 
 
 def single_rate(env_id: str, steps: int, repeats: int) -> float:
@@ -55,11 +56,7 @@ def _rovers(n: int):
     rolling after 20 steps; with their start snapshots."""
     sims = []
     for i in range(n):
-        sim = D.make_sim(obstacles=D.rock_field(20, seed=100 + i), friction=0.8)
-        sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.15)
-        c = D.Commands()
-        c.wheel_speed = [0.15 / sim.parameters.wheel_radius] * 4
-        sim.set_commands(c)
+        sim = rolling_rover(D.rock_field(20, seed=100 + i), 0.15)
         sim.step_n(20)
         sims.append(sim)
     return sims, [s.snapshot() for s in sims]

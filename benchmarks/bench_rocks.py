@@ -1,7 +1,9 @@
 """Rock contacts (issue 17, item 2): microseconds per step against the number of rocks the rover
 is touching at the start of the step (SolverStats.obstacles_touched), not merely present. One
-rover drives 0.15 m/s on M90 through a dense field of box rocks; every step is timed on its own
-and binned by the rocks in contact. Each step in contact is obstacle_substeps = 8 substeps
+rover drives 0.15 m/s on M90 through two fields: low flat rocks that the wheels roll onto
+(their contacts stick: the guessed path) and 100 box rocks that stop the rover (a wheel spinning
+against a rock face slides: ODE's bounded contact); every step is timed on its own and binned by
+the rocks in contact. Each step in contact is obstacle_substeps = 8 substeps
 (issue 13); "substeps off" is timed too. Reference in the same run: the same rover with the rock
 contacts always solved with their friction bounds (SimOptions.guess_obstacle_contacts = False,
 ODE's pivoting solver, as before issue 17), on the same rocks; and the cost of an empty call
@@ -11,25 +13,35 @@ from Python (step_n(0)), which every timed step includes.
 """
 
 import argparse
+import math
 import os
 import statistics
 import sys
 import time
 
+import numpy as np
+
 from ernest_cpp import dynamics as D
+from bench_util import rolling_rover
 
 SPEED = 0.15  # [m/s]
 
 
+def low_rocks(n: int, seed: int = 3) -> list:
+    """n flat box rocks, 0.2-0.5 m across, their tops 1 cm below to 2 cm above the soil surface,
+    in x in [0.8, 3.8] m, |y| <= 1 m: the wheels sink onto them and roll over them."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        s = np.array([rng.uniform(0.2, 0.5), rng.uniform(0.2, 0.5), 0.1])
+        top = rng.uniform(-0.01, 0.02)
+        c = np.array([rng.uniform(0.8, 3.8), rng.uniform(-1.0, 1.0), top - s[2] / 2])
+        out.append(D.BoxObstacle(c, s, float(rng.uniform(0, math.pi)), 0.0, 0.0))
+    return out
+
+
 def run(rocks, steps: int, substeps: int, guess: bool):
-    o = D.make_options("soil", friction=0.8)
-    o.obstacle_substeps = substeps
-    o.guess_obstacle_contacts = guess
-    sim = D.make_sim(obstacles=rocks, options=o)
-    sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, SPEED)
-    c = D.Commands()
-    c.wheel_speed = [SPEED / sim.parameters.wheel_radius] * 4
-    sim.set_commands(c)
+    sim = rolling_rover(rocks, SPEED, substeps, guess)
     sim.step_n(20)
     bins: dict[int, list[float]] = {}
     clock = time.perf_counter_ns
@@ -44,31 +56,37 @@ def run(rocks, steps: int, substeps: int, guess: bool):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=2400, help="steps per run (30 s at 0.0125 s)")
+    ap.add_argument("--substeps", type=int, nargs="+", default=[8, 1],
+                    help="SimOptions.obstacle_substeps values to time (8: default)")
     args = ap.parse_args()
-    rocks = D.rock_field(100, seed=7, length=2.0, width=2.0, x0=0.8)
+    fields = {"low flat rocks (rolled over)": low_rocks(60),
+              "rock_field(100, seed=7, length=2, x0=0.8) (stalls)":
+                  D.rock_field(100, seed=7, length=2.0, width=2.0, x0=0.8)}
     sim = D.make_sim()
     t0 = time.perf_counter_ns()
     for _ in range(10000):
         sim.step_n(0)
     empty = (time.perf_counter_ns() - t0) * 1e-3 / 10000
-    print(f"load average {os.getloadavg()[0]:.1f}; 100 box rocks (rock_field(100, seed=7, "
-          f"length=2, x0=0.8)), M90, {args.steps} steps of {D.SimOptions().dt} s; an empty call "
-          f"from Python costs {empty:.2f} us (included below)")
-    print("| rocks in contact | substeps | steps | guessed (us/step, median) | bounded, before "
-          "(us/step) | ratio |")
-    print("|---|---|---|---|---|---|")
-    for substeps in (8, 1):
-        new, stats, x = run(rocks, args.steps, substeps, True)
-        old, _, x_old = run(rocks, args.steps, substeps, False)
-        for k in sorted(set(new) | set(old)):
-            a = statistics.median(new[k]) if k in new else float("nan")
-            b = statistics.median(old[k]) if k in old else float("nan")
-            print(f"| {k} | {substeps} | {len(new.get(k, []))} / {len(old.get(k, []))} | {a:.1f} | "
-                  f"{b:.1f} | {a / b:.2f} |")
-        shares = stats.obstacle_guessed / max(1, stats.obstacle_guessed + stats.obstacle_bounded)
-        print(f"substeps {substeps}: obstacle (sub)steps solved sticking (sparse) "
-              f"{stats.obstacle_guessed}, bounded (pivoted) {stats.obstacle_bounded} "
-              f"({100 * shares:.0f} % guessed); travelled {x:.2f} m (bounded: {x_old:.2f} m)")
+    print(f"load average {os.getloadavg()[0]:.1f}; M90, {args.steps} steps of {D.SimOptions().dt} s "
+          f"at {SPEED} m/s; an empty call from Python costs {empty:.2f} us (included below)")
+    print("| field | substeps | rocks in contact | steps | guessed (us/step, median) | "
+          "bounded, as before (us/step) | ratio |")
+    print("|---|---|---|---|---|---|---|")
+    notes = []
+    for name, rocks in fields.items():
+        for substeps in args.substeps:
+            new, stats, x = run(rocks, args.steps, substeps, True)
+            old, _, x_old = run(rocks, args.steps, substeps, False)
+            for k in sorted(set(new) | set(old)):
+                a = statistics.median(new[k]) if k in new else float("nan")
+                b = statistics.median(old[k]) if k in old else float("nan")
+                print(f"| {name} | {substeps} | {k} | {len(new.get(k, []))} / {len(old.get(k, []))} "
+                      f"| {a:.1f} | {b:.1f} | {a / b:.2f} |", flush=True)
+            share = stats.obstacle_guessed / max(1, stats.obstacle_guessed + stats.obstacle_bounded)
+            notes.append(f"{name}, substeps {substeps}: obstacle (sub)steps solved sticking "
+                         f"{stats.obstacle_guessed}, bounded {stats.obstacle_bounded} "
+                         f"({100 * share:.0f} % guessed); travelled {x:.2f} m (bounded: {x_old:.2f} m)")
+    print("\n".join(notes))
     return 0
 
 
