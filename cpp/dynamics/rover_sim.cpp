@@ -243,6 +243,8 @@ void RoverSim::Impl::build() {
   std::mt19937_64 rng(opt.seed);
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
   lcp.exact_friction = opt.ground == GroundType::Rigid;  // Coulomb's cap for sliding tyres
+  // On soil the rocks' sliding contacts: Coulomb's cap in the sparse path (issue 17).
+  lcp.coulomb_friction = opt.ground == GroundType::Soil && opt.guess_obstacle_contacts;
   set_step_length(opt.dt);
 
   // Bodies in the nominal pose (rover frame = world, psi = phi = 0); reset() moves them.

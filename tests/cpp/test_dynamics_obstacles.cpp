@@ -48,10 +48,10 @@ const std::vector<BoxObstacle> kSlab{{Eigen::Vector3d(1.5, 0.0, -0.055), Eigen::
 TEST(ObstacleContacts, GuessedStickingMatchesOdesBoundedSolveStepByStep) {
   // From the same state, one step with the contacts guessed sticking and one with their friction
   // bounded (ODE's pivoting): where the tyres stick both give the same LCP solution. Except where
-  // a tyre's friction demand comes near mu F_n (the rear wheels meeting the rock's 5 mm lip, 6
-  // steps): ODE bounds a friction row by mu times the normal force of the moment it clamps it,
-  // an approximation of Coulomb's law that the guessed step, checked against the final normal
-  // force, does not share (seen: up to 1e-5 m/s apart there).
+  // a tyre's friction demand comes near mu F_n (the wheels meeting the rock's 5 mm lip, 12 of
+  // 600 steps): ODE bounds a friction row by mu times the normal force of the moment it clamps
+  // it, an approximation of Coulomb's law that the guessed step (and the sparse solve of a
+  // sliding contact), both with the final normal force, do not share (up to 1e-5 m/s apart).
   const HeightMap hm = HeightMap::flat(8, 8, 0.25);
   RoverSim guessed(RoverParameters{}, hm, kSlab, options(true));
   RoverSim bounded(RoverParameters{}, hm, kSlab, options(false));
@@ -68,7 +68,7 @@ TEST(ObstacleContacts, GuessedStickingMatchesOdesBoundedSolveStepByStep) {
     ASSERT_LE(gap, 1e-4) << "step " << k;
     apart += gap > 1e-9;
   }
-  EXPECT_LE(apart, 10);
+  EXPECT_LE(apart, 20);
   EXPECT_GT(touching, 300);  // the wheels are on the rock for most of the run
   const SolverStats& s = guessed.solver_stats();
   EXPECT_GT(s.obstacle_guessed, 8u * 300u);  // substeps solved sticking
