@@ -104,6 +104,32 @@ def batch_scaling(n: int = 8, steps: int = 400, repeats: int = 5):
               flush=True)
 
 
+def schedule_bound(n: int = 8, chunk: int = 4, calls: int = 100):
+    """What the thread schedule alone allows, whatever the machine's load: each rover's CPU time
+    per call (thread CPU time: preemption by other processes does not count) measured on its own,
+    one after the other, then per call the 2-thread makespan of a fixed
+    share (rover i on thread i % 2, the old BatchStepper) and of handing rovers out in order to
+    whichever thread is free (ThreadPool); speed-up bound = total work / makespan summed over
+    calls."""
+    sims, _ = _rovers(n)
+    total = fixed = greedy = 0.0
+    for _ in range(calls):
+        t = []
+        for sim in sims:
+            t0 = time.thread_time()
+            sim.step_n(chunk)
+            t.append(time.thread_time() - t0)
+        total += sum(t)
+        fixed += max(sum(t[0::2]), sum(t[1::2]))
+        free = [0.0, 0.0]
+        for ti in t:
+            k = free.index(min(free))
+            free[k] += ti
+        greedy += max(free)
+    print(f"\nschedule bound, {n} rovers on rocks, {chunk} steps per call, {calls} calls: fixed "
+          f"share {total / fixed:.2f}x, dynamic {total / greedy:.2f}x (2 threads, perfect cores)")
+
+
 def main():
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load average "
           f"{os.getloadavg()[0]:.1f}")
@@ -118,6 +144,8 @@ def main():
               flush=True)
     print("target: >= 1000 policy steps per second on 2 cores")
     batch_scaling()
+    schedule_bound(chunk=4)
+    schedule_bound(chunk=40, calls=20)
 
 
 if __name__ == "__main__":
