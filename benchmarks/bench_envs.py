@@ -1,13 +1,15 @@
 """Environment throughput: policy steps per second (each 0.5 s of simulation) for one Gymnasium
 env and for the C++ vector env on 1 and 2 threads, on the rock field and the slope. Random
 actions, medians over repeats. Reference in the same run: the single env (Python step loop).
-Target (issue 5): >= 1000 policy steps per second on 2 cores.
+Target (issue 5): >= 1000 policy steps per second on 2 cores. Then the batched stepper alone
+(issue 17): rover-steps per second on rocks for 1 and 2 threads, against one process per core.
 
     ./run bench envs
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import platform
 import statistics
@@ -17,6 +19,8 @@ import gymnasium as gym
 import numpy as np
 
 import ernest_cpp.envs as E
+from ernest_cpp import dynamics as D
+from bench_util import rolling_rover
 
 
 def single_rate(env_id: str, steps: int, repeats: int) -> float:
@@ -47,18 +51,101 @@ def vector_rate(env_id: str, num_envs: int, threads: int, steps: int, repeats: i
     return statistics.median(rates)
 
 
+def _rovers(n: int):
+    """n rovers driving 0.15 m/s on M90 through 20 box rocks each (a different field per rover),
+    rolling after 20 steps; with their start snapshots."""
+    sims = []
+    for i in range(n):
+        sim = rolling_rover(D.rock_field(20, seed=100 + i), 0.15)
+        sim.step_n(20)
+        sims.append(sim)
+    return sims, [s.snapshot() for s in sims]
+
+
+def batch_rate(n: int, threads: int, chunk: int, steps: int, repeats: int) -> float:
+    """Rover-steps per second of a BatchStepper over n rovers on `threads` threads, `chunk`
+    physics steps per call (40 = one policy step); every repeat from the same start."""
+    sims, starts = _rovers(n)
+    batch = D.BatchStepper(sims, threads)
+    rates = []
+    for _ in range(repeats):
+        for s, snap in zip(sims, starts):
+            s.restore(snap)
+        t0 = time.perf_counter()
+        for _ in range(steps // chunk):
+            batch.step(None, chunk)
+        rates.append(n * steps / (time.perf_counter() - t0))
+    return statistics.median(rates)
+
+
+def _process_share(args):
+    return batch_rate(*args)
+
+
+def batch_scaling(n: int = 8, steps: int = 400, repeats: int = 5):
+    """The batched stepper from 1 to 2 threads on rocks (issue 17), and the reference measured in
+    the same run: the same rovers as one process per core (each half of them on one thread)."""
+    print(f"\nBatchStepper, {n} rovers on M90 + 20 rocks (RockField-like), {steps} physics steps "
+          f"each, medians of {repeats}; load average {os.getloadavg()[0]:.1f}")
+    print("| steps per call | 1 thread (rover-steps/s) | 2 threads | speed-up | "
+          "2 processes x 1 thread (reference) | speed-up |")
+    print("|---|---|---|---|---|---|")
+    for chunk in (4, 40):
+        r1 = batch_rate(n, 1, chunk, steps, repeats)
+        r2 = batch_rate(n, 2, chunk, steps, repeats)
+        with multiprocessing.get_context("spawn").Pool(2) as pool:
+            t0 = time.perf_counter()
+            pool.map(_process_share, [(n // 2, 1, chunk, steps, repeats)] * 2)
+            wall = time.perf_counter() - t0
+        # each process ran `repeats` repeats of n/2 rovers; its set-up (rock fields, 20 steps) is
+        # included, so the reference is a lower bound on what two processes achieve
+        rp = n * steps * repeats / wall
+        print(f"| {chunk} | {r1:.0f} | {r2:.0f} | **{r2 / r1:.2f}x** | {rp:.0f} | {rp / r1:.2f}x |",
+              flush=True)
+
+
+def schedule_bound(n: int = 8, chunk: int = 4, calls: int = 100):
+    """What the thread schedule alone allows, whatever the machine's load: each rover's CPU time
+    per call (thread CPU time: preemption by other processes does not count) measured on its own,
+    one after the other, then per call the 2-thread makespan of a fixed
+    share (rover i on thread i % 2, the old BatchStepper) and of handing rovers out in order to
+    whichever thread is free (ThreadPool); speed-up bound = total work / makespan summed over
+    calls."""
+    sims, _ = _rovers(n)
+    total = fixed = greedy = 0.0
+    for _ in range(calls):
+        t = []
+        for sim in sims:
+            t0 = time.thread_time()
+            sim.step_n(chunk)
+            t.append(time.thread_time() - t0)
+        total += sum(t)
+        fixed += max(sum(t[0::2]), sum(t[1::2]))
+        free = [0.0, 0.0]
+        for ti in t:
+            k = free.index(min(free))
+            free[k] += ti
+        greedy += max(free)
+    print(f"\nschedule bound, {n} rovers on rocks, {chunk} steps per call, {calls} calls: fixed "
+          f"share {total / fixed:.2f}x, dynamic {total / greedy:.2f}x (2 threads, perfect cores)")
+
+
 def main():
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load average "
           f"{os.getloadavg()[0]:.1f}")
     print("| scenario | single env (steps/s) | vector 8 envs, 1 thread | vector 8 envs, 2 threads | "
-          "2 threads / single |")
-    print("|---|---|---|---|---|")
+          "2 threads / 1 thread | 2 threads / single |")
+    print("|---|---|---|---|---|---|")
     for env_id in ("ernest/RockField-v0", "ernest/Slope-v0"):
         s = single_rate(env_id, 200, 5)
         v1 = vector_rate(env_id, 8, 1, 40, 5)
         v2 = vector_rate(env_id, 8, 2, 40, 5)
-        print(f"| {env_id} | {s:.0f} | {v1:.0f} | {v2:.0f} | {v2 / s:.2f}x |", flush=True)
+        print(f"| {env_id} | {s:.0f} | {v1:.0f} | {v2:.0f} | {v2 / v1:.2f}x | {v2 / s:.2f}x |",
+              flush=True)
     print("target: >= 1000 policy steps per second on 2 cores")
+    batch_scaling()
+    schedule_bound(chunk=4)
+    schedule_bound(chunk=40, calls=20)
 
 
 if __name__ == "__main__":

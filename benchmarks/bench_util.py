@@ -14,3 +14,20 @@ def median_us(fn, per, repeats=9):
         fn()
         times.append((time.perf_counter() - t0) * 1e6 / per)
     return statistics.median(times)
+
+
+def rolling_rover(obstacles=(), speed=0.15, substeps=8, guess_obstacles=True):
+    """A rover on flat M90 (friction 0.8 on the rocks) with these box obstacles, started rolling at
+    ``speed`` [m/s] with its wheels commanded to it (gimbal free): the driving runs of the
+    dynamics benchmarks. ``substeps``: SimOptions.obstacle_substeps."""
+    from ernest_cpp import dynamics as D
+
+    o = D.make_options("soil", friction=0.8)
+    o.obstacle_substeps = substeps
+    o.guess_obstacle_contacts = guess_obstacles
+    sim = D.make_sim(obstacles=list(obstacles), options=o)
+    sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, speed)
+    c = D.Commands()
+    c.wheel_speed = [speed / sim.parameters.wheel_radius] * 4
+    sim.set_commands(c)
+    return sim

@@ -184,6 +184,10 @@ void bind_dynamics(py::module_& m) {
       .def_readwrite("guess_active_set", &SimOptions::guess_active_set,
                      "guess the bounded rows' active set from the last step and verify it (same "
                      "solution, ~3x faster on soil); False always pivots in ODE's LCP")
+      .def_readwrite("guess_obstacle_contacts", &SimOptions::guess_obstacle_contacts,
+                     "guess obstacle contacts sticking (friction rows unbounded, checked against "
+                     "mu F_n after the step; the sparse solver's path); False: always with "
+                     "their friction bounds (ODE's pivoting)")
       .def_readwrite("sparse_lcp", &SimOptions::sparse_lcp,
                      "solve steps whose rows are unbounded or have a zero bound (contact "
                      "normals) by a sparse LDL^T (minimum-degree order) instead of ODE's dense "
@@ -275,6 +279,12 @@ void bind_dynamics(py::module_& m) {
                     "constraint solves handed to ODE's Dantzig solver")
       .def_readonly("slip_solves", &SolverStats::slip_solves,
                     "extra solves of a step that made its slip agree with eq 12 at its end")
+      .def_readonly("obstacle_guessed", &SolverStats::obstacle_guessed,
+                    "steps (substeps) with obstacle contacts all solved sticking (sparse path)")
+      .def_readonly("obstacle_bounded", &SolverStats::obstacle_bounded,
+                    "steps (substeps) with an obstacle contact solved with its friction bounds")
+      .def_readonly("obstacles_touched", &SolverStats::obstacles_touched,
+                    "distinct obstacles in contact at the start of the last step")
       .def("__repr__", [](const SolverStats& s) {
         return "SolverStats(steps=" + std::to_string(s.steps) + ", first_guess=" +
                std::to_string(s.first_guess) + ", later_guess=" + std::to_string(s.later_guess) +
@@ -282,7 +292,9 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.lcp_errors) + ", sparse_solves=" +
                std::to_string(s.sparse_solves) + ", dense_solves=" +
                std::to_string(s.dense_solves) + ", slip_solves=" +
-               std::to_string(s.slip_solves) + ")";
+               std::to_string(s.slip_solves) + ", obstacle_guessed=" +
+               std::to_string(s.obstacle_guessed) + ", obstacle_bounded=" +
+               std::to_string(s.obstacle_bounded) + ")";
       });
 
   py::class_<Snapshot>(m, "Snapshot", "Complete simulation state for RoverSim.restore().")

@@ -3,28 +3,28 @@
 #pragma once
 
 #include <atomic>
-#include <condition_variable>
 #include <exception>
 #include <memory>
-#include <mutex>
-#include <thread>
 #include <vector>
 
+#include "ernest/common/thread_pool.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 
 namespace ernest::dynamics {
 
 class BatchStepper {
  public:
-  /// threads >= 1; rover i always runs on worker i % threads (the calling thread is worker 0),
-  /// so results never depend on scheduling: every rover owns its ODE world.
+  /// threads >= 1 (the calling thread is one of them). Rovers are handed out one at a time to
+  /// whichever thread is free (ThreadPool's dynamic scheduling: a rover touching rocks takes up
+  /// to SimOptions::obstacle_substeps times longer per step than one on open ground, so a fixed
+  /// share per thread left one thread waiting for the other). Results never depend on which
+  /// thread steps a rover: every rover owns its ODE world and solver data.
   BatchStepper(std::vector<std::shared_ptr<RoverSim>> sims, int threads);
-  ~BatchStepper();
   BatchStepper(const BatchStepper&) = delete;
   BatchStepper& operator=(const BatchStepper&) = delete;
 
   int size() const { return static_cast<int>(sims_.size()); }
-  int threads() const { return threads_; }
+  int threads() const { return pool_.threads(); }
   RoverSim& sim(int i);
   std::shared_ptr<RoverSim> sim_ptr(int i) const;
 
@@ -36,21 +36,9 @@ class BatchStepper {
   void step(const double* commands, int n_steps, double* observations);
 
  private:
-  void run_share(int worker);
-  void worker_loop(int worker);
-
   std::vector<std::shared_ptr<RoverSim>> sims_;
-  int threads_;
-  std::vector<std::thread> pool_;
+  ThreadPool pool_;
   std::vector<std::exception_ptr> errors_;
-  std::mutex mu_;
-  std::condition_variable start_cv_, done_cv_;
-  unsigned long generation_ = 0;
-  int pending_ = 0;
-  bool stop_ = false;
-  const double* commands_ = nullptr;
-  double* observations_ = nullptr;
-  int n_steps_ = 0;
   std::atomic<bool> in_use_{false};  // step() from one thread at a time (exclusive_use.hpp)
 };
 

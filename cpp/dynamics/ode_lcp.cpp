@@ -48,6 +48,67 @@ OdeSolve ode_solver() {
   return fn;
 }
 
+// Row i's place among the solved rows (ascending), or -1 if it is not solved.
+int pos_of(LdltPlan::Mask solved, unsigned i) {
+  if (!(solved >> i & 1)) return -1;
+  return __builtin_popcountll(solved & ((LdltPlan::Mask{1} << i) - 1));
+}
+
+// The solve with friction rows at their bounds (solve_sparse): on entry x holds y = A_SS⁻¹ b_S
+// (rows[0..nf), factorised in ws.ldlt); on return x holds x_S and xf the clamped rows' forces
+// s_i mu_i x_k(i). Returns false if the small system is singular or not finite.
+bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned stride,
+                   const unsigned* rows, int nf, LdltPlan::Mask clamped, LdltPlan::Mask at_lo,
+                   const double* pairslh, const int* findex, double* x, double* xf, int* pos) {
+  constexpr int kMax = LdltPlan::kMaxRows;
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMax, kMax>;
+  using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMax, 1>;
+  const auto a_at = [&](unsigned i, unsigned j) {
+    return i >= j ? A[i * stride + j] : A[j * stride + i];
+  };
+  for (unsigned i = 0; i < n; ++i) pos[i] = -1;
+  for (int a = 0; a < nf; ++a) pos[rows[a]] = a;
+  // c_i = A_SS⁻¹ A_Si times s_i mu_i, for each clamped row whose normal is solved (a normal at
+  // zero makes its friction zero); K: those normals' places.
+  std::array<int, kMax> kpos, normal_of;
+  int nk = 0, m = 0;
+  std::array<unsigned, kMax> crow;
+  for (LdltPlan::Mask c = clamped; c; c &= c - 1) {
+    const unsigned i = static_cast<unsigned>(__builtin_ctzll(c));
+    xf[i] = 0.0;
+    const int pk = pos[findex[i]];
+    if (pk < 0) continue;
+    int q = 0;
+    while (q < nk && kpos[q] != pk) ++q;
+    if (q == nk) kpos[nk++] = pk;
+    normal_of[m] = q;
+    crow[m] = i;
+    double* ci = ws.clamped_cols.data() + m * kMax;
+    const double scale = (at_lo >> i & 1 ? -1.0 : 1.0) * std::abs(pairslh[2 * i + 1]);
+    for (int a = 0; a < nf; ++a) ci[a] = a_at(rows[a], i) * scale;
+    ws.ldlt.solve(ci);
+    ++m;
+  }
+  if (m == 0) return true;
+  Small g = Small::Identity(nk, nk);
+  SmallVec yk(nk);
+  for (int p = 0; p < nk; ++p) yk[p] = x[kpos[p]];
+  for (int r = 0; r < m; ++r) {
+    const double* ci = ws.clamped_cols.data() + r * kMax;
+    for (int p = 0; p < nk; ++p) g(p, normal_of[r]) += ci[kpos[p]];
+  }
+  const SmallVec xk = Eigen::PartialPivLU<Small>(g).solve(yk);
+  if (!xk.allFinite()) return false;
+  for (int r = 0; r < m; ++r) {
+    const double* ci = ws.clamped_cols.data() + r * kMax;
+    const double xn = xk[normal_of[r]];
+    for (int a = 0; a < nf; ++a) x[a] -= ci[a] * xn;
+    const unsigned i = crow[r];
+    xf[i] = (at_lo >> i & 1 ? -1.0 : 1.0) * std::abs(pairslh[2 * i + 1]) * xn;
+  }
+  return true;
+}
+
 // The LCP as one linear system: the unbounded rows and the bounded rows guessed inside their
 // bounds ("active") are solved together, every other bounded row sits at its zero bound
 // (x = 0). Accepted only where Dantzig's method ends too (the solution is unique: A is
@@ -56,28 +117,50 @@ OdeSolve ode_solver() {
 // as in ODE). A wrong guess is flipped and the system solved again, kAttempts times at most.
 // The guess starts from the last accepted one for the same bounded rows (LcpWorkspace::
 // guesses). Returns false without touching the outputs if no guess held, if a row has bounds
-// that depend on another's force (findex) or no zero bound, or if there are over 64 rows.
+// that depend on another's force (findex) and ws.coulomb_friction is off, a row has no zero
+// bound, or there are over 64 rows.
+//
+// Friction rows (findex[i] = k: |x_i| <= mu_i x_k, ODE's pyramid; with ws.coulomb_friction) are
+// guessed too: inside (solved with the others, checked against mu_i times the final x_k) or at
+// a bound, x_i = +-mu_i x_k, a linear relation with the normal force x_k that the solve must
+// respect (seed 004 §3.4, Coulomb's law with the final normal force, as solve_coulomb below for
+// rigid ground). With y = A_SS⁻¹ b_S and c_i = A_SS⁻¹ A_Si for each friction row at a bound,
+// x_S = y - sum_i c_i s_i mu_i x_k(i): the normal forces it involves solve a small dense system
+// (I + G) x_K = y_K first. Checked as Dantzig's method ends: at +bound w_i <= 0, at -bound
+// w_i >= 0.
 bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx, double* outer_w,
                   unsigned nub, const double* pairslh, const int* findex) {
   using Mask = LdltPlan::Mask;
   constexpr int kMax = LdltPlan::kMaxRows;
-  constexpr int kAttempts = 3;
   if (n > static_cast<unsigned>(kMax) || n == 0) return false;  // (row masks of 64 bits)
-  Mask bounded = 0;
+  Mask bounded = 0, friction = 0;
   for (unsigned i = 0; i < n; ++i) {
     const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
     if (i < nub || ((!findex || findex[i] < 0) && lo == -dInfinity && hi == dInfinity)) continue;
-    if ((findex && findex[i] >= 0) || (lo != 0.0 && hi != 0.0)) return false;
+    if (findex && findex[i] >= 0) {
+      if (!ws.coulomb_friction || static_cast<unsigned>(findex[i]) >= n) return false;
+      friction |= Mask{1} << i;
+    } else if (lo != 0.0 && hi != 0.0) {
+      return false;
+    }
     bounded |= Mask{1} << i;
   }
+  const int kAttempts = friction ? 5 : 3;
   const Mask all = n == 64 ? ~Mask{0} : (Mask{1} << n) - 1;
   const unsigned stride = dPAD(n);
   LcpWorkspace::Guess* memory = ws.guess_for(n, bounded);
-  Mask active = memory ? memory->active : 0;
+  // Guessed inside their bounds: as last time for these rows; a new friction row sticks.
+  Mask active = memory ? memory->active : friction;
+  Mask at_lo = memory ? memory->at_lo : 0;  // friction rows at -mu x_k (the others at +)
   std::array<unsigned, kMax> rows;  // the solved rows: unbounded and active
   std::array<double, kMax> x, w;
+  std::array<double, kMax> xf;  // every row's force (clamped friction rows included)
+  std::array<int, kMax> pos;    // row -> its place in rows[], or -1
   Mask solved = 0;
   bool held = false;
+  const auto a_at = [&](unsigned i, unsigned j) {  // ODE fills the lower triangle
+    return i >= j ? A[i * stride + j] : A[j * stride + i];
+  };
   for (int attempt = 0; attempt < kAttempts && !held; ++attempt) {
     solved = (all & ~bounded) | (active & bounded);
     int nf = 0;
@@ -112,11 +195,24 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
       for (int a = 0; a < nf; ++a) x[a] = pairsbx[2 * rows[a]];
       ws.ldlt.solve(x.data());
     }
+    const Mask clamped = friction & ~active;
+    if (clamped && !solve_clamped(ws, n, A, stride, rows.data(), nf, clamped, at_lo, pairslh,
+                                  findex, x.data(), xf.data(), pos.data()))
+      return false;
     Mask wrong = 0;
     for (int a = 0; a < nf; ++a) {
       const unsigned i = rows[a];
       if (!std::isfinite(x[a])) return false;
       if (!(bounded >> i & 1)) continue;
+      if (friction >> i & 1) {  // inside |x_i| <= mu_i x_k, x_k the final normal force
+        const int pk = pos_of(solved, static_cast<unsigned>(findex[i]));
+        const double bound = std::abs(pairslh[2 * i + 1]) * (pk >= 0 ? std::max(x[pk], 0.0) : 0.0);
+        if (std::abs(x[a]) > bound) {
+          wrong |= Mask{1} << i;
+          at_lo = x[a] < 0.0 ? at_lo | (Mask{1} << i) : at_lo & ~(Mask{1} << i);
+        }
+        continue;
+      }
       const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
       if (x[a] < lo || x[a] > hi) wrong |= Mask{1} << i;
     }
@@ -141,17 +237,34 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
         s1 += A[rows[a + 1] * stride + i] * x[a + 1];
       }
       if (a < nf) s0 += A[rows[a] * stride + i] * x[a];
+      for (Mask c = clamped; c; c &= c - 1) {  // the friction rows at a bound
+        const unsigned j = static_cast<unsigned>(__builtin_ctzll(c));
+        s1 += a_at(i, j) * xf[j];
+      }
       const double wi = (s0 + s1) - pairsbx[2 * i];
+      w[i] = wi;
+      if (friction >> i & 1) {  // at +mu x_k: w <= 0; at -mu x_k: w >= 0; at 0 either side
+        const bool lo_side = at_lo >> i & 1;
+        if (xf[i] == 0.0) {
+          at_lo = wi > 0.0 ? at_lo | (Mask{1} << i) : at_lo & ~(Mask{1} << i);
+        } else if (lo_side ? wi < 0.0 : wi > 0.0) {
+          wrong |= Mask{1} << i;  // pulled off its bound: inside
+        }
+        continue;
+      }
       const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
       if (!((lo == 0.0 && wi >= 0.0) || (hi == 0.0 && wi <= 0.0) || wi == 0.0)) wrong |= Mask{1} << i;
-      w[i] = wi;
     }
     held = wrong == 0;
     active ^= wrong;
   }
   if (!held) return false;
-  ws.remember(memory, n, bounded, solved & bounded);
+  ws.remember(memory, n, bounded, solved & bounded, at_lo & friction & ~solved);
   for (unsigned i = 0; i < n; ++i) pairsbx[2 * i + 1] = 0.0;
+  for (Mask c = friction & ~solved; c; c &= c - 1) {
+    const unsigned i = static_cast<unsigned>(__builtin_ctzll(c));
+    pairsbx[2 * i + 1] = xf[i];
+  }
   int nf = 0;
   for (Mask m = solved; m; m &= m - 1) pairsbx[2 * rows[nf] + 1] = x[nf], ++nf;
   if (outer_w) {
@@ -324,12 +437,12 @@ LcpWorkspace::Guess* LcpWorkspace::guess_for(unsigned n, std::uint64_t bounded) 
 }
 
 void LcpWorkspace::remember(Guess* known, unsigned n, std::uint64_t bounded,
-                            std::uint64_t active) {
+                            std::uint64_t active, std::uint64_t at_lo) {
   if (!known) {
     known = &guesses[next_guess];
     next_guess = (next_guess + 1) % kGuesses;
   }
-  *known = Guess{n, bounded, active};
+  *known = Guess{n, bounded, active, at_lo};
 }
 
 void LcpWorkspace::clear() {
@@ -340,7 +453,7 @@ void LcpWorkspace::clear() {
 }
 
 // Layout: next_plan, then per plan n (0: unused), stride, rows[n], pattern[n]; then
-// next_guess and per guess n, bounded, active.
+// next_guess and per guess n, bounded, active, at_lo.
 void LcpWorkspace::save(std::vector<std::uint64_t>& out) const {
   out.clear();
   out.push_back(static_cast<std::uint64_t>(next_plan));
@@ -356,6 +469,7 @@ void LcpWorkspace::save(std::vector<std::uint64_t>& out) const {
     out.push_back(g.n);
     out.push_back(g.bounded);
     out.push_back(g.active);
+    out.push_back(g.at_lo);
   }
 }
 
@@ -393,9 +507,11 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
   const std::uint64_t ng = next();
   if (ng >= kGuesses) bad();
   for (Guess& g : guesses) {
-    const std::uint64_t n = next(), bounded = next(), active = next();
-    if (n > LdltPlan::kMaxRows || (active & ~bounded) != 0) bad();
-    g = Guess{static_cast<unsigned>(n), bounded, active};
+    const std::uint64_t n = next(), bounded = next(), active = next(), at_lo = next();
+    if (n > LdltPlan::kMaxRows || (active & ~bounded) != 0 || (at_lo & ~bounded) != 0 ||
+        (at_lo & active) != 0)
+      bad();
+    g = Guess{static_cast<unsigned>(n), bounded, active, at_lo};
   }
   if (k != in.size()) bad();
   next_plan = static_cast<int>(np);

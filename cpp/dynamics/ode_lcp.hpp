@@ -8,7 +8,7 @@
 // dxSolveLCP, so that the dynamic linker binds ODE's call to it: while a LcpScope is alive on
 // the thread, such problems are solved with SparseLdlt (the bounded rows guessed as they ended
 // last time) and checked exactly as Dantzig's method would end; anything else (friction with
-// findex, a bounded row without a zero bound, guesses that keep failing, more than 64 rows, no
+// findex unless LcpWorkspace::coulomb_friction, a bounded row without a zero bound, guesses that keep failing, more than 64 rows, no
 // scope) goes to ODE's own solver, found with dlsym. ODE bounds a friction row by mu times the
 // normal force found before the friction rows; within a scope that asks for it (exact_friction)
 // its answer is then corrected to Coulomb's law with the final normal force (solve_coulomb).
@@ -37,9 +37,10 @@ struct LcpWorkspace {
   std::array<LdltPlan, kPlans> plans{};
   int next_plan = 0;
   /// Bounded rows (bit i: row i) solved inside their bounds when these rows were bounded.
+  /// Friction rows (findex) are bounded rows too: active = inside, else at +-mu x_k (at_lo: -).
   struct Guess {
     unsigned n = 0;
-    std::uint64_t bounded = 0, active = 0;
+    std::uint64_t bounded = 0, active = 0, at_lo = 0;
   };
   static constexpr int kGuesses = 4;
   std::array<Guess, kGuesses> guesses{};
@@ -52,6 +53,13 @@ struct LcpWorkspace {
   /// contacts have friction rows and the correction (a dense solve of every rock-contact step)
   /// would double the rock field's step time.
   bool exact_friction = false;
+  /// Solve friction (findex) rows in the sparse path too, each guessed inside its bound or at
+  /// +-mu times its contact's final normal force (Coulomb's law, as solve_coulomb; solve_sparse
+  /// in ode_lcp.cpp). Off: such problems go to ODE's Dantzig solver (and its approximate bound).
+  /// Set on soil, where only the rocks' contacts have friction rows.
+  bool coulomb_friction = false;
+  /// A_SS⁻¹ A_Si of the friction rows at a bound (solve_sparse), one column per row.
+  std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> clamped_cols{};
   /// Dense solves with friction (findex) rows whose bounds could not be made mu times the final
   /// normal force (ODE's approximate answer stands; see solve_coulomb in ode_lcp.cpp).
   std::uint64_t friction_unresolved = 0;
@@ -67,7 +75,8 @@ struct LcpWorkspace {
                         const unsigned* rows, int n, int stride);
   /// The remembered guess for this set of bounded rows, or nullptr; remember() stores one.
   Guess* guess_for(unsigned n, std::uint64_t bounded);
-  void remember(Guess* known, unsigned n, std::uint64_t bounded, std::uint64_t active);
+  void remember(Guess* known, unsigned n, std::uint64_t bounded, std::uint64_t active,
+                std::uint64_t at_lo);
   void clear();
   void save(std::vector<std::uint64_t>& out) const;
   /// Inverse of save(); throws std::invalid_argument on data that save() cannot have written.

@@ -119,3 +119,85 @@ bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& v
 }
 
 }  // namespace ernest::dynamics
+
+namespace ernest::dynamics {
+
+using namespace detail;
+
+// Obstacle contacts (seed 004 §3.4 against the boxes; near() in rover_step.cpp collects them),
+// guessed like rigid ground: a wheel's points sticking (normal pushing, both friction rows inside
+// mu F_n, ODE's pyramid) are emitted with unbounded friction rows, so that the step is one linear
+// system for the sparse solver (ode_lcp.cpp) instead of ODE's pivoting with findex; a point of
+// such a wheel found carrying no normal force is emitted without friction rows (obstacle_off);
+// a wheel whose guess fails is emitted as before, ODE's contact with its friction bounded by mu
+// times the normal force. modes == nullptr (every row with its bounds): all bounded.
+void RoverSim::Impl::emit_obstacles(const std::int8_t* modes) {
+  for (int k = 0; k < n_obstacle_contacts; ++k) {
+    const int w = obstacle_wheel[k];
+    const bool sticking =
+        modes && w >= 0 && obstacle_try[w] == kFree && opt.guess_obstacle_contacts;
+    dContact c = obstacle_contact[k];
+    if (sticking) {
+      c.surface.mode &= ~dContactApprox1;
+      c.surface.mu = (obstacle_off >> k & 1) ? 0.0 : dInfinity;
+    }
+    dJointID j = dJointCreateContact(world, contacts, &c);
+    dJointAttach(j, obstacle_bodies[2 * k], obstacle_bodies[2 * k + 1]);
+    dJointSetFeedback(j, &obstacle_fb[k]);
+  }
+}
+
+// After the step: each wheel's next guess (obstacle_next: sticking where every loaded point's
+// friction is strictly inside mu F_n: its force if it was guessed sticking, its slip velocity if
+// it was bounded) and whether this attempt's sticking guesses held. A wrong
+// guess is corrected for the next attempt: unloaded points lose their friction rows, and a wheel
+// with a point beyond its friction cap, or an unloaded point that pushes, is bounded. Each
+// correction adds an off point or a bounded wheel, so the attempts end.
+bool RoverSim::Impl::settle_obstacles(const std::int8_t* modes) {
+  std::array<bool, 4> inside{true, true, true, true}, bound_it{};
+  std::uint64_t off = obstacle_off;
+  for (int k = 0; k < n_obstacle_contacts; ++k) {
+    const int w = obstacle_wheel[k];
+    if (w < 0) continue;
+    const dContact& c = obstacle_contact[k];
+    const double side = obstacle_wheel_first[k] ? 1.0 : -1.0;  // force on the wheel
+    const Vec3 f = side * to_vec(obstacle_wheel_first[k] ? obstacle_fb[k].f1 : obstacle_fb[k].f2);
+    dVector3 t1, t2;
+    dPlaneSpace(c.geom.normal, t1, t2);
+    const double fn = side * f.dot(to_vec(c.geom.normal));
+    const double cap = mu * std::max(fn, 0.0);
+    const double l1 = std::abs(f.dot(to_vec(t1))), l2 = std::abs(f.dot(to_vec(t2)));
+    const bool guessed = modes && obstacle_try[w] == kFree && opt.guess_obstacle_contacts;
+    if (fn > 0.0 && guessed && !(l1 < cap && l2 < cap)) inside[w] = false;
+    if (fn > 0.0 && !guessed) {
+      // Bounded: sliding is read from the slip velocity (the row's law, lambda = -v_t / slip,
+      // against mu F_n), not from the force: ODE's friction bound is mu times the normal force
+      // of the moment it clamped, which can sit well below mu times the final one.
+      dVector3 v;
+      dBodyGetPointVel(body[2 + w], c.geom.pos[0], c.geom.pos[1], c.geom.pos[2], v);
+      const double slip = c.surface.slip1;
+      const double u1 = std::abs(to_vec(v).dot(to_vec(t1))), u2 = std::abs(to_vec(v).dot(to_vec(t2)));
+      if (!(u1 < slip * cap && u2 < slip * cap)) inside[w] = false;
+    }
+    if (!guessed) continue;
+    if (obstacle_off >> k & 1) {
+      bound_it[w] = bound_it[w] || fn > 0.0;  // needs its friction after all
+    } else if (!(fn > 0.0)) {
+      off |= std::uint64_t{1} << k;
+    } else if (!(l1 <= cap && l2 <= cap)) {
+      bound_it[w] = true;
+    }
+  }
+  bool held = off == obstacle_off;
+  for (int w = 0; w < 4; ++w) {
+    obstacle_next[w] = inside[w] ? kFree : kBounded;
+    if (bound_it[w]) {
+      obstacle_try[w] = kBounded;
+      held = false;
+    }
+  }
+  obstacle_off = off;
+  return held;
+}
+
+}  // namespace ernest::dynamics

@@ -142,11 +142,8 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
   }
   // ---- ground
   for (int i = 0; i < 4; ++i) emit_ground(i, modes, f[2 + i], t[2 + i]);
-  // ---- rigid obstacles (always with their bounds: friction limits depend on the normal force)
-  for (int k = 0; k < n_obstacle_contacts; ++k) {
-    dJointID j = dJointCreateContact(world, contacts, &obstacle_contact[k]);
-    dJointAttach(j, obstacle_bodies[2 * k], obstacle_bodies[2 * k + 1]);
-  }
+  // ---- rigid obstacles (rover_rigid.cpp)
+  emit_obstacles(modes);
   for (int b = 0; b < 6; ++b) {
     dBodySetForce(body[b], f[b].x(), f[b].y(), f[b].z());
     dBodySetTorque(body[b], t[b].x(), t[b].y(), t[b].z());
@@ -232,6 +229,8 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
       outcome(row, status_of(r.u, r.bound));
     }
   }
+  rows_held = held;
+  if (n_obstacle_contacts > 0 && !settle_obstacles(modes)) held = false;
   return held;
 }
 

@@ -243,6 +243,8 @@ void RoverSim::Impl::build() {
   std::mt19937_64 rng(opt.seed);
   mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
   lcp.exact_friction = opt.ground == GroundType::Rigid;  // Coulomb's cap for sliding tyres
+  // On soil the rocks' sliding contacts: Coulomb's cap in the sparse path (issue 17).
+  lcp.coulomb_friction = opt.ground == GroundType::Soil && opt.guess_obstacle_contacts;
   set_step_length(opt.dt);
 
   // Bodies in the nominal pose (rover frame = world, psi = phi = 0); reset() moves them.
@@ -391,6 +393,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   row_mode_before.fill(kFree);
   alternating = false;
   rigid_deflection.fill(Vec3::Zero());
+  obstacle_mode.fill(kFree);
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);
@@ -546,6 +549,7 @@ Snapshot RoverSim::snapshot() const {
   s.alternating = impl_->alternating;
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < 3; ++k) s.rigid_deflection[i][k] = impl_->rigid_deflection[i][k];
+  s.obstacle_mode = impl_->obstacle_mode;
   impl_->lcp.save(s.solver_patterns);
   s.valid = true;
   return s;
@@ -578,6 +582,9 @@ void RoverSim::restore(const Snapshot& s) {
   impl_->alternating = s.alternating;
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < 3; ++k) impl_->rigid_deflection[i][k] = s.rigid_deflection[i][k];
+  for (std::int8_t m : s.obstacle_mode)
+    require(m == kFree || m == kBounded, "RoverSim.restore: corrupt snapshot (obstacle_mode)");
+  impl_->obstacle_mode = s.obstacle_mode;
   impl_->pending_force.setZero();
   impl_->diverged = false;
   impl_->start_current = false;

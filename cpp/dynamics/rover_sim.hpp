@@ -72,6 +72,12 @@ struct SimOptions {
   /// every step; a wrong guess is retried and finally solved by pivoting. The result is the same
   /// LCP solution either way (to rounding); false always pivots (tests, comparisons).
   bool guess_active_set = true;
+  /// Guess each wheel's obstacle contacts sticking (friction rows unbounded, checked against
+  /// mu F_n after the step, as rigid ground: cpp/dynamics/rover_rigid.cpp), so that a step on
+  /// rocks is one linear system for the sparse solver; a wrong guess is retried with the
+  /// friction bounded by mu times the normal force (ODE's pivoting). false: always bounded, as
+  /// before issue 17 (comparisons). Needs guess_active_set.
+  bool guess_obstacle_contacts = true;
   /// Solve the step's constraint system with a sparse LDLᵀ (minimum-degree order,
   /// cpp/dynamics/sparse_ldlt.hpp) when every row is unbounded or has a zero bound (the contacts'
   /// normal rows, guessed pushing or not as they ended last time and checked), which the
@@ -174,6 +180,13 @@ struct SolverStats {
   /// Extra solves of a step made to find the slip ratios that agree with eq 12 at the step's end
   /// (the implicit slip of cpp/dynamics/rover_step.cpp); 0 when the first slip already agreed.
   std::uint64_t slip_solves = 0;
+  /// Steps (substeps) with obstacle contacts whose every wheel was solved sticking (friction rows
+  /// unbounded: a linear system for the sparse solver), and those with a wheel solved bounded
+  /// (ODE's friction bounded by mu times the normal force: its pivoting solver).
+  std::uint64_t obstacle_guessed = 0;
+  std::uint64_t obstacle_bounded = 0;
+  /// Distinct obstacles in contact with the rover at the start of the last step (not a count).
+  int obstacles_touched = 0;
 };
 
 /// Complete simulation state; restore() reproduces the run bit for bit.
@@ -192,6 +205,8 @@ struct Snapshot {
   bool alternating = false;
   /// Tangential deflection of each tyre on rigid ground (world, m; cpp/dynamics/rover_rigid.cpp).
   std::array<std::array<double, 3>, 4> rigid_deflection{};
+  /// Each wheel's obstacle contacts guessed sticking (0) or bounded (3) (rover_rigid.cpp).
+  std::array<std::int8_t, 4> obstacle_mode{};
   /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
   /// of the steps that follow; internal layout, see cpp/dynamics/ode_lcp.hpp).
   std::vector<std::uint64_t> solver_patterns;

@@ -207,6 +207,20 @@ struct RoverSim::Impl {
   std::array<dContact, detail::kMaxObstacleContacts> obstacle_contact{};
   std::array<dBodyID, 2 * detail::kMaxObstacleContacts> obstacle_bodies{};
   int n_obstacle_contacts = 0;
+  // Obstacle contacts' guesses (rover_rigid.cpp): each point's wheel (-1: not a wheel) and side
+  // (the wheel is the joint's body 1 or 2), its feedback; per wheel whether its points are
+  // emitted sticking (kFree: friction rows unbounded, checked after the step) or bounded
+  // (kBounded: ODE's friction bounded by mu times the normal force), for this step's attempts
+  // (obstacle_try) and as the next step's guess (obstacle_mode, in the Snapshot); points of a
+  // sticking wheel found carrying no normal force, emitted without friction rows (obstacle_off).
+  std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_wheel{};
+  std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
+  std::array<dJointFeedback, detail::kMaxObstacleContacts> obstacle_fb{};
+  std::array<std::int8_t, 4> obstacle_mode{}, obstacle_try{}, obstacle_next{};
+  std::uint64_t obstacle_off = 0;
+  bool rows_held = true;  // settle(): the guessed rows (not the obstacles) held
+  std::array<dGeomID, detail::kMaxObstacleContacts> touched{};  // obstacles in the contacts
+  int n_touched = 0;
   std::array<Snapshot::Body, 6> saved{};        // bodies at the start of the step (retries)
   std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
   std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
@@ -250,6 +264,8 @@ struct RoverSim::Impl {
                   std::array<std::int8_t, kGuessedRowCount>& tried, int& attempts);
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);
+  void emit_obstacles(const std::int8_t* modes);
+  bool settle_obstacles(const std::int8_t* modes);
   struct DriveRow {
     int row;
     Vec3 axis;         // world, at the start of the step

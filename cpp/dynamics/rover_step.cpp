@@ -276,6 +276,17 @@ void RoverSim::Impl::near(dGeomID a, dGeomID b) {
   // the step: benchmarks/RESULTS.md, "step independence").
   const double cfm = contact_cfm * n;
   const double slip = opt.rigid_slip * n;
+  const dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
+  std::int8_t wheel = -1;
+  bool first = true;
+  for (int i = 0; i < 4; ++i) {
+    if (ba == body[2 + i]) wheel = static_cast<std::int8_t>(i);
+    if (bb == body[2 + i]) wheel = static_cast<std::int8_t>(i), first = false;
+  }
+  const dGeomID rock = first ? b : a;  // distinct obstacles touched (SolverStats)
+  if (std::find(touched.begin(), touched.begin() + n_touched, rock) == touched.begin() + n_touched &&
+      n_touched < static_cast<int>(touched.size()))
+    touched[n_touched++] = rock;
   for (int k = 0; k < n && n_obstacle_contacts < kMaxObstacleContacts; ++k) {
     dContact& c = obstacle_contact[n_obstacle_contacts];
     c = cs[k];
@@ -285,14 +296,17 @@ void RoverSim::Impl::near(dGeomID a, dGeomID b) {
     c.surface.mu = mu;
     c.surface.soft_erp = contact_erp;
     c.surface.soft_cfm = cfm;
-    obstacle_bodies[2 * n_obstacle_contacts] = dGeomGetBody(a);
-    obstacle_bodies[2 * n_obstacle_contacts + 1] = dGeomGetBody(b);
+    obstacle_bodies[2 * n_obstacle_contacts] = ba;
+    obstacle_bodies[2 * n_obstacle_contacts + 1] = bb;
+    obstacle_wheel[n_obstacle_contacts] = wheel;
+    obstacle_wheel_first[n_obstacle_contacts] = first;
     ++n_obstacle_contacts;
   }
 }
 
 void RoverSim::Impl::prepare_obstacles() {
   n_obstacle_contacts = 0;
+  n_touched = 0;
   if (obstacle_geoms.empty()) return;
   // Never let an exception cross ODE's C callback: capture it and rethrow after the collision.
   dSpaceCollide2(
@@ -357,7 +371,7 @@ bool RoverSim::Impl::solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess
       alternating = guess == row_mode_before && row_mode_before != row_mode;
       break;
     }
-    if (attempts == 1 && row_mode_before != row_mode) {  // the other of the last two outcomes
+    if (attempts == 1 && !rows_held && row_mode_before != row_mode) {  // the other of the last two outcomes
       const auto& other = tried == row_mode_before ? row_mode : row_mode_before;
       if (other != tried) {
         guess = other;
@@ -378,6 +392,7 @@ bool RoverSim::Impl::solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess
   }
   if (!held) {  // guessing off (or, never seen, no progress): every row with its bounds
     if (attempts++ > 0) restore_bodies();
+    obstacle_try.fill(kBounded);
     emit(nullptr);
     dWorldStep(world, h);
     settle(nullptr, next.data());
@@ -417,7 +432,9 @@ void RoverSim::Impl::step() {
   obstacles_collected = false;
   const int n = opt.obstacle_substeps;
   if (h != opt.dt) set_step_length(opt.dt);
-  if (n == 1 || diverged || !touching_obstacles()) {
+  const bool touching = !diverged && touching_obstacles();
+  stats.obstacles_touched = n_touched;
+  if (n == 1 || !touching) {
     step_once();
     return;
   }
@@ -466,6 +483,8 @@ void RoverSim::Impl::step_once() {
   alternating = false;
   const std::uint64_t lcp_messages = ode_lcp_messages;
   const detail::LcpScope lcp_scope(&lcp);
+  obstacle_try = obstacle_mode;
+  obstacle_off = 0;
 
   // Implicit slip (backward Euler in eq 12). Where the wheel centre barely moves the slip is a
   // steep function of its velocity (on the eps_slip^-1/2 = 1 cm/s scale of eq 12's factor; see
@@ -537,6 +556,14 @@ void RoverSim::Impl::step_once() {
   if (opt.ground == GroundType::Rigid) commit_rigid();
   row_mode_before = row_mode;
   row_mode = next;
+  if (n_obstacle_contacts > 0) {
+    bool bounded = false;
+    for (int k = 0; k < n_obstacle_contacts; ++k)
+      bounded = bounded || obstacle_wheel[k] < 0 || obstacle_try[obstacle_wheel[k]] != kFree ||
+                !opt.guess_obstacle_contacts;
+    ++(bounded ? stats.obstacle_bounded : stats.obstacle_guessed);
+  }
+  obstacle_mode = obstacle_next;
   ++stats.steps;
   if (ode_lcp_messages != lcp_messages) ++stats.lcp_errors;
   stats.sparse_solves = lcp.sparse;

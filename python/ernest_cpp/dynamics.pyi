@@ -122,6 +122,7 @@ class SimOptions:
     rigid_tyre_stiffness_y: float
     rigid_tyre_damping: float
     guess_active_set: bool
+    guess_obstacle_contacts: bool
     sparse_lcp: bool
     max_speed: float
     max_angular_speed: float
@@ -139,6 +140,9 @@ class SolverStats:
     sparse_solves: int
     dense_solves: int
     slip_solves: int
+    obstacle_guessed: int
+    obstacle_bounded: int
+    obstacles_touched: int
 
 class Commands:
     wheel_speed: list[float]
