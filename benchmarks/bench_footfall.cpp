@@ -68,7 +68,8 @@ int main(int argc, char** argv) {
   const Eigen::MatrixXd ends = sample_waypoints(mapper, map, checker, 2 * queries, 7);
   PlannerOptions po;
   po.time_limit = 1.0;
-  std::vector<double> t_sbl, t_rrt, t_ours, t_ompl, l_raw, r_ours, r_ompl;
+  if (argc > 2) po.range = std::atof(argv[2]);
+  std::vector<double> c_sbl, c_rrt, t_sbl, t_rrt, t_ours, t_ompl, l_raw, r_ours, r_ompl;
   int ok_sbl = 0, ok_rrt = 0, shorter = 0, dirty = 0;
   for (int k = 0; k < queries; ++k) {
     po.seed = 100 + k;
@@ -78,10 +79,11 @@ int main(int argc, char** argv) {
     po.planner = PlannerType::kRrtConnect;
     LegPlanner rrt(checker, po);
     const PlanResult c = rrt.plan(ends.col(2 * k), ends.col(2 * k + 1));
-    if (c.status == PlanStatus::kSolved) ++ok_rrt, t_rrt.push_back(c.seconds);
+    if (c.status == PlanStatus::kSolved) ++ok_rrt, t_rrt.push_back(c.seconds), c_rrt.push_back(double(c.checks));
     if (r.status != PlanStatus::kSolved) continue;
     ++ok_sbl;
     t_sbl.push_back(r.seconds);
+    c_sbl.push_back(double(r.checks));
     // 3. Smoothing (§3.4.2) against OMPL's simplifier, same plan.
     const SmoothingResult s = smooth_path(checker, r.path);
     t_ours.push_back(s.seconds);
@@ -99,6 +101,7 @@ int main(int argc, char** argv) {
   std::printf("  SBL:         %5.1f ms median, success %d/%d  (target <= 50 ms)\n", 1e3 * median(t_sbl), ok_sbl, queries);
   std::printf("  RRT-Connect: %5.1f ms median, success %d/%d  (OMPL reference, same queries)\n", 1e3 * median(t_rrt),
               ok_rrt, queries);
+  std::printf("  configurations checked per query (median): SBL %.0f, RRT-Connect %.0f\n", median(c_sbl), median(c_rrt));
   std::printf("  ratio SBL / RRT-Connect: %.2f\n", median(t_sbl) / std::max(1e-12, median(t_rrt)));
   std::printf("smoothing the %d SBL plans (median raw length %.2f rad):\n", ok_sbl, median(l_raw));
   std::printf("  Dijkstra-bisection (ours): %5.1f ms median, length x %.3f median, shorter %d/%d (target <= 50 ms)\n",

@@ -84,6 +84,18 @@ struct LegCollisionChecker::Impl {
   Eigen::MatrixXd table;
   std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> terrain;
   double terrain_top = 0.0;  // highest terrain point of the mesh
+  // Highest terrain point per block of the mesh window: a shape entirely above the blocks under
+  // it (plus the clearance) needs no mesh query (most of a swing happens in the air).
+  double block = 0.25, block_x0 = 0.0, block_y0 = 0.0;
+  int blocks = 0;
+  Eigen::MatrixXd block_top;
+  double local_top(const Eigen::Vector3d& centre, double bound) const {
+    const int i0 = std::clamp(int(std::floor((centre.x() - bound - block_x0) / block)), 0, blocks - 1);
+    const int i1 = std::clamp(int(std::floor((centre.x() + bound - block_x0) / block)), 0, blocks - 1);
+    const int j0 = std::clamp(int(std::floor((centre.y() - bound - block_y0) / block)), 0, blocks - 1);
+    const int j1 = std::clamp(int(std::floor((centre.y() + bound - block_y0) / block)), 0, blocks - 1);
+    return block_top.block(i0, j0, i1 - i0 + 1, j1 - j0 + 1).maxCoeff();
+  }
   walker::LegWorkspace ws;
   std::vector<fcl::Transform3d> poses;  // current swing shapes
   std::vector<Eigen::Vector3d> centres;
@@ -209,11 +221,27 @@ LegCollisionChecker::LegCollisionChecker(const walker::WalkerModel& model,
   std::vector<fcl::Vector3d> vertices;
   vertices.reserve(std::size_t(cells) * cells);
   s.terrain_top = -kInf;
+  s.block_x0 = x0;
+  s.block_y0 = y0;
+  s.blocks = std::max(1, static_cast<int>(std::ceil(h * (cells - 1) / s.block)));
+  s.block_top.setConstant(s.blocks, s.blocks, -kInf);
   for (int i = 0; i < cells; ++i)
     for (int j = 0; j < cells; ++j) {
       const double x = x0 + i * h, y = y0 + j * h, z = terrain.height(x, y);
       vertices.emplace_back(x, y, z);
       s.terrain_top = std::max(s.terrain_top, z);
+    }
+  // Each mesh cell (two triangles) raises the top of every block it overlaps.
+  for (int i = 0; i + 1 < cells; ++i)
+    for (int j = 0; j + 1 < cells; ++j) {
+      const double z = std::max(std::max(vertices[i * cells + j].z(), vertices[i * cells + j + 1].z()),
+                                std::max(vertices[(i + 1) * cells + j].z(), vertices[(i + 1) * cells + j + 1].z()));
+      const int a0 = std::min(s.blocks - 1, int(std::floor(i * h / s.block)));
+      const int a1 = std::min(s.blocks - 1, int(std::ceil((i + 1) * h / s.block)) - 1);
+      const int b0 = std::min(s.blocks - 1, int(std::floor(j * h / s.block)));
+      const int b1 = std::min(s.blocks - 1, int(std::ceil((j + 1) * h / s.block)) - 1);
+      for (int a = a0; a <= std::max(a0, a1); ++a)
+        for (int b = b0; b <= std::max(b0, b1); ++b) s.block_top(a, b) = std::max(s.block_top(a, b), z);
     }
   std::vector<fcl::Triangle> triangles;
   triangles.reserve(2 * std::size_t(cells - 1) * (cells - 1));
@@ -247,7 +275,8 @@ bool LegCollisionChecker::valid(const Eigen::Ref<const Eigen::VectorXd>& q_leg, 
     const bool wheel = s.specs[a].type == s.n;
     // Terrain: skip shapes entirely above the highest terrain point (plus clearance).
     if (!(wheel && !include_wheel)) {
-      if (s.lowest[a] <= s.terrain_top + s.env_clearance + 1e-9 &&
+      const double bound = 0.5 * s.specs[a].length + s.specs[a].radius + s.env_clearance;
+      if (s.lowest[a] <= s.local_top(s.centres[a], bound) + s.env_clearance + 1e-9 &&
           s.hit(s.inflated[a][0], s.poses[a], s.terrain.get(), fcl::Transform3d::Identity()))
         return false;
     }

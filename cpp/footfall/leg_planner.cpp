@@ -114,10 +114,16 @@ LegPlanner::LegPlanner(LegCollisionChecker& checker, const PlannerOptions& optio
   s.space->setBounds(bounds);
   // SBL grids its trees in a projection: the first three joints (hip yaw, hip pitch, knee), not
   // the default random linear projection (drawn from OMPL's global seed: not reproducible).
+  // Explicit cell sizes (a twentieth of each range, OMPL's default) mark it user-configured, so
+  // the space's setup keeps it.
   std::vector<unsigned int> components;
-  for (int i = 0; i < std::min(n, 3); ++i) components.push_back(i);
+  std::vector<double> cells;
+  for (int i = 0; i < std::min(n, 3); ++i) {
+    components.push_back(i);
+    cells.push_back((model.upper_limits()[i] - model.lower_limits()[i]) / 20.0);
+  }
   s.space->registerDefaultProjection(
-      std::make_shared<ob::RealVectorOrthogonalProjectionEvaluator>(s.space.get(), components));
+      std::make_shared<ob::RealVectorOrthogonalProjectionEvaluator>(s.space.get(), cells, components));
   Impl* raw = &s;
   s.space->setStateSamplerAllocator([raw](const ob::StateSpace* sp) -> ob::StateSamplerPtr {
     return std::make_shared<SeededSampler>(sp, raw->sampler_seed++);

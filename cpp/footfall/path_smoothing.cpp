@@ -3,6 +3,7 @@
 #include <boost/graph/adjacency_list.hpp>
 #include <boost/graph/dijkstra_shortest_paths.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <vector>
 
@@ -34,12 +35,12 @@ std::vector<int> shortest(LegCollisionChecker& checker, const Eigen::MatrixXd& n
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j) boost::add_edge(i, j, (nodes.col(j) - nodes.col(i)).norm(), g);
   for (int i = 0; i + 1 < n; ++i) known[std::size_t(i) * n + i + 1] = 1;  // the path's own edges
-  std::vector<int> pred(n);
+  std::vector<std::size_t> pred(n);
   std::vector<double> dist(n);
   for (;;) {
     boost::dijkstra_shortest_paths(g, 0, boost::predecessor_map(pred.data()).distance_map(dist.data()));
     std::vector<int> route{n - 1};
-    while (route.back() != 0) route.push_back(pred[route.back()]);
+    while (route.back() != 0) route.push_back(static_cast<int>(pred[route.back()]));
     std::reverse(route.begin(), route.end());
     bool free = true;
     for (std::size_t k = 0; k + 1 < route.size(); ++k) {

@@ -102,6 +102,7 @@ CellEvaluation StabilityMapper::evaluate(double x, double y, const Eigen::Ref<co
   e.q_above.resize(n);
   const Eigen::Vector3d c(x, y, terrain_.height(x, y));
   if (!solve(target(c, 0.0), seed, e.q)) return e;
+  e.ground_reachable = true;
   if (!solve(target(c, options_.lift_height), e.q, e.q_above)) return e;
   // New CG and CPS of the stance with the foot on c (§3.3).
   model_.forward(leg_, e.q, ws_);
@@ -136,6 +137,8 @@ StabilityMap StabilityMapper::map() {
   if (!start_ok_) return out;  // no step can leave the current foot (§3.3)
   // Breadth-first from the cell under the current foot: each cell's IK starts from a solved
   // neighbour's angles (continuation), so almost every local solve converges in a few steps.
+  // Assumption: the reachable cells form one region with the current foot's (a region cut off
+  // by unreachable cells is not searched).
   const int n = model_.joints_per_leg();
   Eigen::MatrixXd solution(n, std::size_t(side) * side);
   std::vector<char> state(std::size_t(side) * side, 0);  // 0 new, 1 queued, 2 solved, 3 failed
@@ -165,12 +168,15 @@ StabilityMap StabilityMapper::map() {
       }
     }
     const CellEvaluation e = evaluate(out.origin_x + i * options_.cell, out.origin_y + j * options_.cell, seed);
-    state[index(i, j)] = e.status == CellStatus::kUnreachable ? 3 : 2;
+    state[index(i, j)] = e.ground_reachable ? 2 : 3;
     if (e.status != CellStatus::kUnreachable) {
-      solution.col(index(i, j)) = e.q;
       out.status(i, j) = static_cast<std::uint8_t>(e.status);
       out.margin(i, j) = e.margin;
     }
+    // Only cells with a ground solution seed and expand: the reachable region is connected
+    // (continuous IK), so its unreachable border is evaluated once and nothing beyond it.
+    if (!e.ground_reachable) continue;
+    solution.col(index(i, j)) = e.q;
     for (int k = 0; k < 4; ++k) {
       const int a = i + di[k], b = j + dj[k];
       if (a < 0 || b < 0 || a >= side || b >= side || state[index(a, b)] != 0) continue;

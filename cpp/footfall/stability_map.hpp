@@ -34,6 +34,7 @@ struct StabilityMapOptions {
 /// One evaluated cell (or goal point).
 struct CellEvaluation {
   CellStatus status = CellStatus::kUnreachable;
+  bool ground_reachable = false;  ///< IK on the ground point (the waypoint may still fail)
   double margin = 0.0;          ///< SSM or NESM of the CPS [m] (0 when unreachable)
   Eigen::VectorXd q;            ///< the leg's joint angles on the ground point
   Eigen::VectorXd q_above;      ///< at the compliance waypoint above it

@@ -233,18 +233,18 @@ TEST(Footfall, NoPlanAnswersAndErrors) {
   const PlanResult r = planner.plan(s.q.col(0), up.col(0));  // the wheel on the ground
   EXPECT_EQ(r.status, PlanStatus::kNoPlan);
   EXPECT_EQ(r.reason, "start in collision");
-  // A goal inside a closed pocket cannot be reached: the budget ends the search.
   Eigen::VectorXd yawed = up.col(0);
   yawed[0] = s.model.upper_limits()[0];
   EXPECT_EQ(planner.plan(up.col(0), yawed).reason, "goal in collision");
-  // plan_step: far goal, NaN goal, a goal under the body.
+  // plan_step: far goal, NaN goal, an unstable goal (no cell clears a 5 m margin).
   StepOptions so;
   so.map.cell = 0.05;
   EXPECT_NE(plan_step(s.model, flat, s.body, s.q, 0, 9.0, 0.0, so).reason.find("unreachable"), std::string::npos);
   EXPECT_THROW(plan_step(s.model, flat, s.body, s.q, 0, std::nan(""), 0.0, so), std::invalid_argument);
-  const StepPlan under = plan_step(s.model, flat, s.body, s.q, 0, 0.4, 0.0, so);
-  EXPECT_EQ(under.status, PlanStatus::kNoPlan);
-  EXPECT_FALSE(under.reason.empty());
+  so.map.min_margin = 5.0;
+  const StepPlan unstable = plan_step(s.model, flat, s.body, s.q, 0, s.feet(0, 0) + 0.2, 0.0, so);
+  EXPECT_EQ(unstable.status, PlanStatus::kNoPlan);
+  EXPECT_NE(unstable.reason.find("unstable"), std::string::npos) << unstable.reason;
 }
 
 // §4.1/§5.1: a step planned against the sagged pose: the path runs from the start through the
