@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "ernest/footfall/leg_planner.hpp"
 #include "ernest/footfall/path_smoothing.hpp"
@@ -13,6 +14,7 @@
 #include "ernest/footfall/step_planner.hpp"
 #include "ernest/footfall/swing_sag.hpp"
 #include "ernest/statics/stability.hpp"
+#include "ernest/walker/self_collision.hpp"
 #include "ernest/walker/stance_loads.hpp"
 #include "test_util.hpp"
 
@@ -70,18 +72,28 @@ TEST(Footfall, TerrainClearanceMatchesTheHeightAboveAFlatPlane) {
   }
 }
 
-TEST(Footfall, SelfCollisionWithTheNeighbourLeg) {
+// Against walker::self_collisions (the whole-robot check of cpp/walker) on random leg-0
+// configurations with zero clearances over ground far below: the same verdict every time.
+TEST(Footfall, SelfCollisionAgreesWithTheWalkerCheck) {
   Scene s;
-  const HeightMap flat = HeightMap::flat(12, 12, 0.05, 0.0, -6, -6);
-  LegCollisionChecker checker(s.model, flat, s.body, s.q, 0);
-  Eigen::MatrixXd up = walker::lift_legs(s.model, s.body, s.q, {0}, 0.3);
-  ASSERT_TRUE(checker.valid(up.col(0)));
-  Eigen::VectorXd yawed = up.col(0);
-  yawed[0] = s.model.upper_limits()[0];  // hip yaw 75° towards leg 1 (60° away)
-  EXPECT_FALSE(checker.valid(yawed));
-  EXPECT_FALSE(checker.motion_valid(up.col(0), yawed, 0.01)) << "the edge ends in collision";
-  Eigen::VectorXd outside = up.col(0);
-  outside[1] = s.model.upper_limits()[1] + 0.1;
+  const HeightMap deep = HeightMap::flat(12, 12, 0.1, -10.0, -6, -6);
+  LegCollisionChecker checker(s.model, deep, s.body, s.q, 0, zero_clearance(s.model.joints_per_leg()));
+  std::mt19937_64 rng(3);
+  const Eigen::VectorXd lo = s.model.lower_limits(), hi = s.model.upper_limits();
+  int colliding = 0;
+  for (int k = 0; k < 300; ++k) {
+    Eigen::MatrixXd q = s.q;
+    for (int i = 0; i < s.model.joints_per_leg(); ++i)
+      q(i, 0) = std::uniform_real_distribution<double>(lo[i], hi[i])(rng);
+    bool walker_hit = false;
+    for (const auto& p : walker::self_collisions(s.model, q, 0.0)) walker_hit |= p.leg_a == 0 || p.leg_b == 0;
+    colliding += walker_hit;
+    EXPECT_EQ(checker.valid(q.col(0)), !walker_hit) << "sample " << k;
+  }
+  EXPECT_GT(colliding, 10);
+  EXPECT_LT(colliding, 290);
+  Eigen::VectorXd outside = s.q.col(0);
+  outside[1] = hi[1] + 0.1;
   EXPECT_FALSE(checker.valid(outside)) << "outside the joint limits";
 }
 
@@ -173,7 +185,7 @@ TEST(Footfall, PlansAmongRocksAreCollisionFreeWhenRecheckedDensely) {
   const StabilityMap map = mapper.map();
   LegCollisionChecker checker(s.model, rocks, s.body, s.q, 0);
   LegCollisionChecker exact(s.model, rocks, s.body, s.q, 0, zero_clearance(s.model.joints_per_leg()));
-  const int queries = 24;
+  const int queries = 20;
   const Eigen::MatrixXd ends = sample_waypoints(mapper, map, checker, 2 * queries, 11);
   PlannerOptions po;
   int solved = 0;
@@ -233,9 +245,12 @@ TEST(Footfall, NoPlanAnswersAndErrors) {
   const PlanResult r = planner.plan(s.q.col(0), up.col(0));  // the wheel on the ground
   EXPECT_EQ(r.status, PlanStatus::kNoPlan);
   EXPECT_EQ(r.reason, "start in collision");
-  Eigen::VectorXd yawed = up.col(0);
-  yawed[0] = s.model.upper_limits()[0];
-  EXPECT_EQ(planner.plan(up.col(0), yawed).reason, "goal in collision");
+  EXPECT_EQ(planner.plan(up.col(0), s.q.col(0)).reason, "goal in collision");
+  PlannerOptions tiny;
+  tiny.time_limit = 1e-4;  // the budget ends the search: an explicit answer, no hang
+  const PlanResult t = LegPlanner(checker, tiny).plan(up.col(0), walker::lift_legs(s.model, s.body, s.q, {0}, 0.6).col(0));
+  if (t.status == PlanStatus::kNoPlan) EXPECT_EQ(t.reason, "no path found within the time limit");
+  EXPECT_LT(t.seconds, 0.5);
   // plan_step: far goal, NaN goal, an unstable goal (no cell clears a 5 m margin).
   StepOptions so;
   so.map.cell = 0.05;
