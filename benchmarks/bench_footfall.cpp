@@ -36,7 +36,9 @@ int main(int argc, char** argv) {
   const Eigen::Isometry3d body = model.standard_body_pose();
   const Eigen::MatrixXd q = model.standard_configuration();
   const Eigen::Matrix3Xd feet = model.contact_points(body, q);
-  RockFieldOptions rocks;
+  RockFieldOptions rocks;  // a dense field: about six rocks within the leg's reach
+  rocks.rocks = 40;
+  rocks.max_height = 0.5;
   const auto terrain = rock_field(rocks, feet.topRows<2>());
   const int leg = 0;
   std::printf("FootFall on SDM-B, %d rocks (%.2f-%.2f m high) on a %.0f m field, leg %d; %s\n", rocks.rocks,
@@ -70,8 +72,9 @@ int main(int argc, char** argv) {
   po.time_limit = 1.0;
   if (argc > 2) po.range = std::atof(argv[2]);
   std::vector<double> c_sbl, c_rrt, t_sbl, t_rrt, t_ours, t_ompl, l_raw, r_ours, r_ompl;
-  int ok_sbl = 0, ok_rrt = 0, shorter = 0, dirty = 0;
+  int ok_sbl = 0, ok_rrt = 0, shorter = 0, dirty = 0, straight = 0;
   for (int k = 0; k < queries; ++k) {
+    straight += checker.motion_valid(ends.col(2 * k), ends.col(2 * k + 1), po.epsilon);
     po.seed = 100 + k;
     po.planner = PlannerType::kSbl;
     LegPlanner sbl(checker, po);
@@ -97,7 +100,8 @@ int main(int argc, char** argv) {
     dirty += first_colliding_edge(dense, r.path, 1e-3) >= 0;
     dirty += first_colliding_edge(dense, s.path, 1e-3) >= 0;
   }
-  std::printf("planning, %d random feasible queries (waypoints above random stable cells), 1 s budget:\n", queries);
+  std::printf("planning, %d random feasible queries (waypoints above random stable cells), 1 s budget;\n"
+              "  %d of them have a free straight edge (the rest must go round or over rocks):\n", queries, straight);
   std::printf("  SBL:         %5.1f ms median, success %d/%d  (target <= 50 ms)\n", 1e3 * median(t_sbl), ok_sbl, queries);
   std::printf("  RRT-Connect: %5.1f ms median, success %d/%d  (OMPL reference, same queries)\n", 1e3 * median(t_rrt),
               ok_rrt, queries);

@@ -3,6 +3,9 @@
 
 #include <pybind11/pybind11.h>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
 namespace ernest::bindings {
 void bind_soil(pybind11::module_& m);
 void bind_dynamics(pybind11::module_& m);
@@ -14,4 +17,6 @@ void bind_statics_rover(pybind11::module_& m);  // part of bind_statics (binding
 void bind_walker(pybind11::module_& m);
 void bind_perception(pybind11::module_& m);
 void bind_footfall(pybind11::module_& m);
+/// A checked 4 × 4 rigid transform from Python (bindings/walker.cpp); `field` names it in errors.
+Eigen::Isometry3d to_isometry(const Eigen::Matrix4d& t, const char* field);
 }  // namespace ernest::bindings

@@ -29,19 +29,7 @@ using walker::WalkerModel;
 
 namespace {
 
-// A 4 × 4 body pose from Python: finite, last row (0 0 0 1), rotation block a rotation.
-Eigen::Isometry3d body_pose(const Eigen::Matrix4d& t) {
-  if (!t.allFinite()) throw std::invalid_argument("body is not finite");
-  if ((t.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9)
-    throw std::invalid_argument("body must have last row (0, 0, 0, 1)");
-  const Eigen::Matrix3d r = t.topLeftCorner<3, 3>();
-  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > 1e-6 || r.determinant() <= 0.0)
-    throw std::invalid_argument("body rotation block is not a rotation matrix");
-  Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
-  iso.linear() = r;
-  iso.translation() = t.topRightCorner<3, 1>();
-  return iso;
-}
+Eigen::Isometry3d body_pose(const Eigen::Matrix4d& t) { return to_isometry(t, "body"); }
 
 Eigen::Matrix4d matrix(const Eigen::Isometry3d& t) { return t.matrix(); }
 

@@ -86,7 +86,7 @@ struct LegCollisionChecker::Impl {
   double terrain_top = 0.0;  // highest terrain point of the mesh
   // Highest terrain point per block of the mesh window: a shape entirely above the blocks under
   // it (plus the clearance) needs no mesh query (most of a swing happens in the air).
-  double block = 0.25, block_x0 = 0.0, block_y0 = 0.0;
+  double block = 0.1, block_x0 = 0.0, block_y0 = 0.0;
   int blocks = 0;
   Eigen::MatrixXd block_top;
   double local_top(const Eigen::Vector3d& centre, double bound) const {
