@@ -71,10 +71,11 @@ int main(int argc, char** argv) {
   PlannerOptions po;
   po.time_limit = 1.0;
   if (argc > 2) po.range = std::atof(argv[2]);
-  std::vector<double> c_sbl, c_rrt, t_sbl, t_rrt, t_ours, t_ompl, l_raw, r_ours, r_ompl;
+  std::vector<double> h_sbl, h_rrt, h_ours, h_ratio, c_sbl, c_rrt, t_sbl, t_rrt, t_ours, t_ompl, l_raw, r_ours, r_ompl;
   int ok_sbl = 0, ok_rrt = 0, shorter = 0, dirty = 0, straight = 0;
   for (int k = 0; k < queries; ++k) {
-    straight += checker.motion_valid(ends.col(2 * k), ends.col(2 * k + 1), po.epsilon);
+    const bool free_edge = checker.motion_valid(ends.col(2 * k), ends.col(2 * k + 1), po.epsilon);
+    straight += free_edge;
     po.seed = 100 + k;
     po.planner = PlannerType::kSbl;
     LegPlanner sbl(checker, po);
@@ -86,10 +87,12 @@ int main(int argc, char** argv) {
     if (r.status != PlanStatus::kSolved) continue;
     ++ok_sbl;
     t_sbl.push_back(r.seconds);
+    if (!free_edge) h_sbl.push_back(r.seconds), h_rrt.push_back(c.seconds);
     c_sbl.push_back(double(r.checks));
     // 3. Smoothing (§3.4.2) against OMPL's simplifier, same plan.
     const SmoothingResult s = smooth_path(checker, r.path);
     t_ours.push_back(s.seconds);
+    if (!free_edge) h_ours.push_back(s.seconds), h_ratio.push_back(s.length / r.length);
     const auto t0 = Clock::now();
     const Eigen::MatrixXd o = sbl.simplify_with_ompl(r.path);
     t_ompl.push_back(seconds_since(t0));
@@ -105,11 +108,16 @@ int main(int argc, char** argv) {
   std::printf("  SBL:         %5.1f ms median, success %d/%d  (target <= 50 ms)\n", 1e3 * median(t_sbl), ok_sbl, queries);
   std::printf("  RRT-Connect: %5.1f ms median, success %d/%d  (OMPL reference, same queries)\n", 1e3 * median(t_rrt),
               ok_rrt, queries);
+  std::printf("  the %zu queries without a free straight edge: SBL %.1f ms, RRT-Connect %.1f ms median\n",
+              h_sbl.size(), 1e3 * median(h_sbl), 1e3 * median(h_rrt));
   std::printf("  configurations checked per query (median): SBL %.0f, RRT-Connect %.0f\n", median(c_sbl), median(c_rrt));
   std::printf("  ratio SBL / RRT-Connect: %.2f\n", median(t_sbl) / std::max(1e-12, median(t_rrt)));
   std::printf("smoothing the %d SBL plans (median raw length %.2f rad):\n", ok_sbl, median(l_raw));
   std::printf("  Dijkstra-bisection (ours): %5.1f ms median, length x %.3f median, shorter %d/%d (target <= 50 ms)\n",
               1e3 * median(t_ours), median(r_ours), shorter, ok_sbl);
+  std::printf("  ours on the queries without a free straight edge: %.1f ms median, %.1f ms max, length x %.3f\n",
+              1e3 * median(h_ours), 1e3 * (h_ours.empty() ? 0.0 : *std::max_element(h_ours.begin(), h_ours.end())),
+              median(h_ratio));
   std::printf("  OMPL simplifyMax:          %5.1f ms median, length x %.3f median\n", 1e3 * median(t_ompl),
               median(r_ompl));
   std::printf("  time ratio ours / OMPL: %.2f\n", median(t_ours) / std::max(1e-12, median(t_ompl)));

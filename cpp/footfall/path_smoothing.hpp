@@ -15,9 +15,9 @@ namespace ernest::footfall {
 
 struct SmoothingOptions {
   double epsilon = 0.01;           ///< bisection resolution of the edge checks [rad]
-  double min_improvement = 1e-3;   ///< stop when an iteration gains less than this fraction
+  double min_improvement = 0.01;   ///< stop when an iteration gains less than this fraction (1 %)
   int max_iterations = 30;         ///< Dijkstra–bisection rounds at most
-  int max_nodes = 200;             ///< no bisection beyond this many nodes
+  int max_nodes = 64;              ///< no bisection beyond this many nodes
   void validate() const;
 };
 
