@@ -4,6 +4,9 @@
 #include <Eigen/Geometry>
 #include <pybind11/pybind11.h>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
 namespace ernest::bindings {
 void bind_soil(pybind11::module_& m);
 void bind_dynamics(pybind11::module_& m);
@@ -19,4 +22,5 @@ void bind_walker_sim(pybind11::module_& m);
 /// std::invalid_argument naming `field` otherwise (bindings/walker.cpp).
 Eigen::Isometry3d to_isometry(const Eigen::Matrix4d& t, const char* field);
 void bind_perception(pybind11::module_& m);
+void bind_footfall(pybind11::module_& m);
 }  // namespace ernest::bindings

@@ -32,4 +32,7 @@ PYBIND11_MODULE(_core, m) {
   auto perception = m.def_submodule(
       "perception", "Simulated stereo cameras, OpenCV stereo and the elevation map (seed 004 §2.4)");
   ernest::bindings::bind_perception(perception);
+  auto footfall = m.def_submodule(
+      "footfall", "FootFall single-leg planning: stability maps, OMPL SBL, smoothing, sag (seed 003)");
+  ernest::bindings::bind_footfall(footfall);
 }

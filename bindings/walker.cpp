@@ -23,7 +23,8 @@ namespace ernest::bindings {
 
 using namespace ernest::walker;
 
-// A 4 × 4 homogeneous transform from Python, checked (finite, rigid, last row 0 0 0 1).
+// A 4 × 4 homogeneous transform from Python, checked (finite, rigid, last row 0 0 0 1); shared
+// with bindings/footfall.cpp through bindings.hpp.
 Eigen::Isometry3d to_isometry(const Eigen::Matrix4d& t, const char* field) {
   if (!t.allFinite()) throw std::invalid_argument(std::string(field) + " is not finite");
   if ((t.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9)

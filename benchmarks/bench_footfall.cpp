@@ -1,0 +1,126 @@
+// FootFall benchmark (issue 16): on the SDM-B standard stance among rocks (footfall::rock_field),
+//  * the stability map of leg 0 with 2 cm cells over its full reach (target ≤ 0.5 s),
+//  * SBL (OMPL) on random feasible queries between compliance waypoints above random stable cells
+//    (target ≤ 50 ms median), success rate, and OMPL's RRT-Connect on the same queries as the
+//    same-run reference,
+//  * the Dijkstra–bisection smoother (§3.4.2, target ≤ 50 ms median, shorter paths) against OMPL's
+//    PathSimplifier::simplifyMax on the same plans (length, time),
+//  * a dense re-check (1e-3 rad, zero clearance) of every returned path.
+// Medians; `./run bench footfall` (then benchmarks/bench_footfall.py, the Python-side timings).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <vector>
+
+#include "bench_util.hpp"
+#include "ernest/footfall/leg_planner.hpp"
+#include "ernest/footfall/path_smoothing.hpp"
+#include "ernest/footfall/scenario.hpp"
+#include "ernest/footfall/stability_map.hpp"
+
+using namespace ernest::footfall;
+using ernest::bench::Clock;
+
+namespace {
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int queries = argc > 1 ? std::atoi(argv[1]) : 60;
+  const ernest::walker::WalkerModel model(ernest::walker::sdm_b_parameters());
+  const Eigen::Isometry3d body = model.standard_body_pose();
+  const Eigen::MatrixXd q = model.standard_configuration();
+  const Eigen::Matrix3Xd feet = model.contact_points(body, q);
+  RockFieldOptions rocks;  // a dense field: about six rocks within the leg's reach
+  rocks.rocks = 40;
+  rocks.max_height = 0.5;
+  const auto terrain = rock_field(rocks, feet.topRows<2>());
+  const int leg = 0;
+  std::printf("FootFall on SDM-B, %d rocks (%.2f-%.2f m high) on a %.0f m field, leg %d; %s\n", rocks.rocks,
+              rocks.min_height, rocks.max_height, rocks.length, leg, ernest::bench::cpu_model().c_str());
+
+  // 1. Stability map (§3.3).
+  StabilityMapOptions mo;
+  std::vector<double> tm;
+  StabilityMap map;
+  for (int r = 0; r < 5; ++r) {
+    const auto t0 = Clock::now();
+    StabilityMapper mapper(model, terrain, body, q, leg, mo);
+    map = mapper.map();
+    tm.push_back(seconds_since(t0));
+  }
+  std::printf("stability map, %.0f cm cells, %ld x %ld, reach %.2f m: %.3f s median  (target <= 0.5 s)\n",
+              100 * mo.cell, long(map.status.rows()), long(map.status.cols()), map.reach, median(tm));
+  std::printf("  stable %d, unstable %d, unreachable %d cells, %ld IK solves, criterion %s\n",
+              map.count(CellStatus::kStable), map.count(CellStatus::kUnstable), map.count(CellStatus::kUnreachable),
+              map.ik_solves, map.nesm ? "NESM" : "SSM");
+
+  // 2. Random feasible queries (§3.4.1).
+  StabilityMapper mapper(model, terrain, body, q, leg, mo);
+  LegCollisionChecker checker(model, terrain, body, q, leg);
+  CollisionOptions exact;
+  exact.environment_clearance = exact.own_leg_clearance = 0.0;
+  exact.clearance_table = Eigen::MatrixXd::Zero(model.joints_per_leg() + 1, model.joints_per_leg() + 2);
+  LegCollisionChecker dense(model, terrain, body, q, leg, exact);
+  const Eigen::MatrixXd ends = sample_waypoints(mapper, map, checker, 2 * queries, 7);
+  PlannerOptions po;
+  po.time_limit = 1.0;
+  if (argc > 2) po.range = std::atof(argv[2]);
+  std::vector<double> h_sbl, h_rrt, h_ours, h_ratio, c_sbl, c_rrt, t_sbl, t_rrt, t_ours, t_ompl, l_raw, r_ours, r_ompl;
+  int ok_sbl = 0, ok_rrt = 0, shorter = 0, dirty = 0, straight = 0;
+  for (int k = 0; k < queries; ++k) {
+    const bool free_edge = checker.motion_valid(ends.col(2 * k), ends.col(2 * k + 1), po.epsilon);
+    straight += free_edge;
+    po.seed = 100 + k;
+    po.planner = PlannerType::kSbl;
+    LegPlanner sbl(checker, po);
+    const PlanResult r = sbl.plan(ends.col(2 * k), ends.col(2 * k + 1));
+    po.planner = PlannerType::kRrtConnect;
+    LegPlanner rrt(checker, po);
+    const PlanResult c = rrt.plan(ends.col(2 * k), ends.col(2 * k + 1));
+    if (c.status == PlanStatus::kSolved) ++ok_rrt, t_rrt.push_back(c.seconds), c_rrt.push_back(double(c.checks));
+    if (r.status != PlanStatus::kSolved) continue;
+    ++ok_sbl;
+    t_sbl.push_back(r.seconds);
+    if (!free_edge) h_sbl.push_back(r.seconds), h_rrt.push_back(c.seconds);
+    c_sbl.push_back(double(r.checks));
+    // 3. Smoothing (§3.4.2) against OMPL's simplifier, same plan.
+    const SmoothingResult s = smooth_path(checker, r.path);
+    t_ours.push_back(s.seconds);
+    if (!free_edge) h_ours.push_back(s.seconds), h_ratio.push_back(s.length / r.length);
+    const auto t0 = Clock::now();
+    const Eigen::MatrixXd o = sbl.simplify_with_ompl(r.path);
+    t_ompl.push_back(seconds_since(t0));
+    l_raw.push_back(r.length);
+    r_ours.push_back(s.length / r.length);
+    r_ompl.push_back(path_length(o) / r.length);
+    shorter += s.length < r.length - 1e-9 || r.path.cols() == 2;
+    dirty += first_colliding_edge(dense, r.path, 1e-3) >= 0;
+    dirty += first_colliding_edge(dense, s.path, 1e-3) >= 0;
+  }
+  std::printf("planning, %d random feasible queries (waypoints above random stable cells), 1 s budget;\n"
+              "  %d of them have a free straight edge (the rest must go round or over rocks):\n", queries, straight);
+  std::printf("  SBL:         %5.1f ms median, success %d/%d  (target <= 50 ms)\n", 1e3 * median(t_sbl), ok_sbl, queries);
+  std::printf("  RRT-Connect: %5.1f ms median, success %d/%d  (OMPL reference, same queries)\n", 1e3 * median(t_rrt),
+              ok_rrt, queries);
+  std::printf("  the %zu queries without a free straight edge: SBL %.1f ms, RRT-Connect %.1f ms median\n",
+              h_sbl.size(), 1e3 * median(h_sbl), 1e3 * median(h_rrt));
+  std::printf("  configurations checked per query (median): SBL %.0f, RRT-Connect %.0f\n", median(c_sbl), median(c_rrt));
+  std::printf("  ratio SBL / RRT-Connect: %.2f\n", median(t_sbl) / std::max(1e-12, median(t_rrt)));
+  std::printf("smoothing the %d SBL plans (median raw length %.2f rad):\n", ok_sbl, median(l_raw));
+  std::printf("  Dijkstra-bisection (ours): %5.1f ms median, length x %.3f median, shorter %d/%d (target <= 50 ms)\n",
+              1e3 * median(t_ours), median(r_ours), shorter, ok_sbl);
+  std::printf("  ours on the queries without a free straight edge: %.1f ms median, %.1f ms max, length x %.3f\n",
+              1e3 * median(h_ours), 1e3 * (h_ours.empty() ? 0.0 : *std::max_element(h_ours.begin(), h_ours.end())),
+              median(h_ratio));
+  std::printf("  OMPL simplifyMax:          %5.1f ms median, length x %.3f median\n", 1e3 * median(t_ompl),
+              median(r_ompl));
+  std::printf("  time ratio ours / OMPL: %.2f\n", median(t_ours) / std::max(1e-12, median(t_ompl)));
+  std::printf("dense re-check (1e-3 rad, zero clearance) of %d raw + smoothed paths: %d in collision\n", 2 * ok_sbl, dirty);
+  return 0;
+}

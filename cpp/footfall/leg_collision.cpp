@@ -1,0 +1,348 @@
+#include "ernest/footfall/leg_collision.hpp"
+
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/collision.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "ernest/common/validation.hpp"
+
+namespace ernest::footfall {
+
+using GeometryPtr = std::shared_ptr<fcl::CollisionGeometryd>;
+
+Eigen::MatrixXd default_clearance_table(int joints) {
+  Eigen::MatrixXd t = Eigen::MatrixXd::Constant(joints + 1, joints + 2, 0.05);
+  t.col(joints + 1).setConstant(0.03);
+  return t;
+}
+
+void CollisionOptions::validate(int joints) const {
+  const char* o = "CollisionOptions";
+  require_in_range(o, "environment_clearance", environment_clearance, 0.0, 1.0);
+  require_in_range(o, "own_leg_clearance", own_leg_clearance, 0.0, 1.0);
+  require_in_range(o, "terrain_margin", terrain_margin, 0.0, 10.0);
+  if (clearance_table.size() == 0) return;
+  require(clearance_table.rows() == joints + 1 && clearance_table.cols() == joints + 2,
+          std::string(o) + ".clearance_table is " + std::to_string(clearance_table.rows()) + " x " +
+              std::to_string(clearance_table.cols()) + ", expected " + std::to_string(joints + 1) +
+              " x " + std::to_string(joints + 2) + " (swing shapes x other shapes + chassis)");
+  for (Eigen::Index i = 0; i < clearance_table.size(); ++i)
+    require_in_range(o, "clearance_table[]", clearance_table.data()[i], 0.0, 1.0);
+}
+
+namespace {
+
+// A capsule of the leg in its link frame: centre, axis and length; its FCL geometry lies along
+// the local z axis (a sphere when the length is zero).
+struct ShapeSpec {
+  int type = 0;  // link index, or n for the wheel
+  double radius = 0.0, length = 0.0;
+};
+
+GeometryPtr make_capsule(double radius, double length) {
+  if (length < 1e-9) return std::make_shared<fcl::Sphered>(radius);
+  return std::make_shared<fcl::Capsuled>(radius, length);
+}
+
+fcl::Transform3d segment_pose(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1) {
+  fcl::Transform3d t = fcl::Transform3d::Identity();
+  t.translation() = 0.5 * (p0 + p1);
+  const Eigen::Vector3d axis = p1 - p0;
+  const double len = axis.norm();
+  if (len > 1e-9) t.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis / len).toRotationMatrix();
+  return t;
+}
+
+struct Obstacle {  // a fixed shape (another leg's capsule or the chassis), world frame
+  int type = 0;
+  GeometryPtr geometry;
+  fcl::Transform3d pose;
+  Eigen::Vector3d centre;
+  double bound = 0.0;  // bounding-sphere radius
+};
+
+}  // namespace
+
+struct LegCollisionChecker::Impl {
+  Eigen::Isometry3d body;
+  int n = 0;
+  Eigen::VectorXd lower, upper;
+  std::vector<ShapeSpec> specs;                 // swing shapes (the leg's capsules, then the wheel)
+  std::vector<std::vector<GeometryPtr>> inflated;  // [shape][0 terrain, 1 own leg, 2 + type]
+  std::vector<GeometryPtr> plain;               // swing shapes, not inflated
+  double env_clearance = 0.0, own_clearance = 0.0;
+  std::vector<Obstacle> obstacles;              // other legs and the chassis
+  std::vector<std::array<int, 2>> own_pairs;    // swing shape pairs checked within the leg
+  Eigen::MatrixXd table;
+  std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> terrain;
+  double terrain_top = 0.0;  // highest terrain point of the mesh
+  // Highest terrain point per block of the mesh window: a shape entirely above the blocks under
+  // it (plus the clearance) needs no mesh query (most of a swing happens in the air).
+  double block = 0.1, block_x0 = 0.0, block_y0 = 0.0;
+  int blocks = 0;
+  Eigen::MatrixXd block_top;
+  double local_top(const Eigen::Vector3d& centre, double bound) const {
+    const int i0 = std::clamp(int(std::floor((centre.x() - bound - block_x0) / block)), 0, blocks - 1);
+    const int i1 = std::clamp(int(std::floor((centre.x() + bound - block_x0) / block)), 0, blocks - 1);
+    const int j0 = std::clamp(int(std::floor((centre.y() - bound - block_y0) / block)), 0, blocks - 1);
+    const int j1 = std::clamp(int(std::floor((centre.y() + bound - block_y0) / block)), 0, blocks - 1);
+    return block_top.block(i0, j0, i1 - i0 + 1, j1 - j0 + 1).maxCoeff();
+  }
+  walker::LegWorkspace ws;
+  std::vector<fcl::Transform3d> poses;  // current swing shapes
+  std::vector<Eigen::Vector3d> centres;
+  std::vector<double> lowest;            // lowest point of each swing shape (world z)
+  fcl::CollisionRequestd request;
+  fcl::CollisionResultd result;
+  Eigen::VectorXd mid;                   // bisection scratch
+  std::vector<std::array<double, 2>> queue;
+
+  explicit Impl(const walker::WalkerModel& m) : ws(m) {}
+
+  // World poses of the swing shapes at q (after model.forward).
+  void place(const walker::WalkerModel& model) {
+    std::size_t k = 0;
+    for (int i = 0; i < n; ++i) {
+      const walker::Capsule& g = model.params().joints[i].geometry;
+      if (g.radius <= 0.0) continue;
+      const auto r = ws.rotation.block<3, 3>(0, 3 * i);
+      const Eigen::Vector3d p0 = body * (ws.joint_position.col(i) + r * g.p0);
+      const Eigen::Vector3d p1 = body * (ws.joint_position.col(i) + r * g.p1);
+      poses[k] = segment_pose(p0, p1);
+      centres[k] = 0.5 * (p0 + p1);
+      lowest[k] = std::min(p0.z(), p1.z()) - g.radius;
+      ++k;
+    }
+    const Eigen::Vector3d axle = body.linear() * ws.foot_rotation.col(1);
+    const Eigen::Vector3d c = body * ws.wheel_centre;
+    const double half = 0.5 * model.params().wheel_width;
+    poses[k] = segment_pose(c - half * axle, c + half * axle);
+    centres[k] = c;
+    lowest[k] = c.z() - half * std::abs(axle.z()) - model.params().wheel_radius;
+  }
+
+  bool hit(const GeometryPtr& a, const fcl::Transform3d& ta, const fcl::CollisionGeometryd* b,
+           const fcl::Transform3d& tb) {
+    result.clear();
+    return fcl::collide(a.get(), ta, b, tb, request, result) > 0;
+  }
+};
+
+LegCollisionChecker::LegCollisionChecker(const walker::WalkerModel& model,
+                                         const dynamics::HeightMap& terrain,
+                                         const Eigen::Isometry3d& body,
+                                         const Eigen::Ref<const Eigen::MatrixXd>& q, int leg,
+                                         const CollisionOptions& options)
+    : model_(model), leg_(leg), impl_(std::make_unique<Impl>(model)) {
+  model.check_leg(leg);
+  model.check_configuration(q);
+  require(body.matrix().allFinite(), "LegCollisionChecker: body pose is not finite");
+  const int n = model.joints_per_leg();
+  options.validate(n);
+  Impl& s = *impl_;
+  s.body = body;
+  s.n = n;
+  s.lower = model.lower_limits();
+  s.upper = model.upper_limits();
+  s.table = options.clearance_table.size() ? options.clearance_table : default_clearance_table(n);
+  const walker::WalkerParameters& p = model.params();
+
+  // Swing shapes and their inflated geometries, one per kind of check.
+  for (int i = 0; i < n; ++i) {
+    const walker::Capsule& g = p.joints[i].geometry;
+    if (g.radius > 0.0) s.specs.push_back({i, g.radius, (g.p1 - g.p0).norm()});
+  }
+  s.specs.push_back({n, p.wheel_radius, p.wheel_width});
+  for (const ShapeSpec& sp : s.specs) {
+    std::vector<GeometryPtr> g{make_capsule(sp.radius + options.environment_clearance, sp.length),
+                               make_capsule(sp.radius + options.own_leg_clearance, sp.length)};
+    for (int t = 0; t < n + 2; ++t) g.push_back(make_capsule(sp.radius + s.table(sp.type, t), sp.length));
+    s.inflated.push_back(std::move(g));
+  }
+  const std::size_t count = s.specs.size();
+  s.poses.resize(count);
+  s.centres.resize(count);
+  s.lowest.resize(count);
+
+  // Pairs of the swing leg that touch in the standard stance are joined by construction
+  // (walker/self_collision's rule); the others are checked.
+  model.forward(leg, model.standard_configuration().col(leg), s.ws);
+  const Eigen::Isometry3d saved = s.body;
+  s.body = Eigen::Isometry3d::Identity();
+  s.place(model);
+  std::vector<GeometryPtr>& plain = s.plain;
+  for (const ShapeSpec& sp : s.specs) plain.push_back(make_capsule(sp.radius, sp.length));
+  s.env_clearance = options.environment_clearance;
+  s.own_clearance = options.own_leg_clearance;
+  for (std::size_t a = 0; a < count; ++a)
+    for (std::size_t b = a + 1; b < count; ++b)
+      if (!s.hit(plain[a], s.poses[a], plain[b].get(), s.poses[b])) s.own_pairs.push_back({int(a), int(b)});
+  auto chassis = std::make_shared<fcl::Cylinderd>(p.chassis_collision_radius, 2.0 * p.chassis_collision_half_height);
+  std::vector<char> touches_chassis(count);
+  for (std::size_t a = 0; a < count; ++a)
+    touches_chassis[a] = s.hit(plain[a], s.poses[a], chassis.get(), fcl::Transform3d::Identity());
+  s.body = saved;
+
+  // Fixed obstacles: the other legs' capsules and the chassis, in the world.
+  for (int k = 0; k < model.legs(); ++k) {
+    if (k == leg) continue;
+    for (const walker::LinkCapsule& c : model.leg_capsules(k, q.col(k))) {
+      const Eigen::Vector3d p0 = body * c.p0, p1 = body * c.p1;
+      const double len = (p1 - p0).norm();
+      s.obstacles.push_back({c.link < 0 ? n : c.link, make_capsule(c.radius, len), segment_pose(p0, p1),
+                             0.5 * (p0 + p1), 0.5 * len + c.radius});
+    }
+  }
+  fcl::Transform3d chassis_pose = fcl::Transform3d::Identity();
+  chassis_pose.linear() = body.linear();
+  chassis_pose.translation() = body.translation();
+  s.obstacles.push_back({n + 1, chassis, chassis_pose, body.translation(),
+                         std::hypot(p.chassis_collision_radius, p.chassis_collision_half_height)});
+  // The chassis is checked only against shapes that do not touch it in the standard stance.
+  for (std::size_t a = 0; a < count; ++a)
+    if (touches_chassis[a]) s.inflated[a][2 + n + 1].reset();
+
+  // Terrain: the height map sampled on its own spacing over the square the leg can reach.
+  double reach = p.foot_offset.norm() + p.wheel_radius;
+  for (const walker::JointSpec& j : p.joints) reach += j.offset.norm();
+  reach += options.terrain_margin;
+  const Eigen::Vector3d hip = body * model.hip_mount(leg).translation();
+  const double h = terrain.spacing();
+  const int cells = std::max(2, static_cast<int>(std::ceil(2.0 * reach / h)) + 1);
+  const double x0 = hip.x() - 0.5 * h * (cells - 1), y0 = hip.y() - 0.5 * h * (cells - 1);
+  std::vector<fcl::Vector3d> vertices;
+  vertices.reserve(std::size_t(cells) * cells);
+  s.terrain_top = -kInf;
+  s.block_x0 = x0;
+  s.block_y0 = y0;
+  s.blocks = std::max(1, static_cast<int>(std::ceil(h * (cells - 1) / s.block)));
+  s.block_top.setConstant(s.blocks, s.blocks, -kInf);
+  for (int i = 0; i < cells; ++i)
+    for (int j = 0; j < cells; ++j) {
+      const double x = x0 + i * h, y = y0 + j * h, z = terrain.height(x, y);
+      vertices.emplace_back(x, y, z);
+      s.terrain_top = std::max(s.terrain_top, z);
+    }
+  // Each mesh cell (two triangles) raises the top of every block it overlaps.
+  for (int i = 0; i + 1 < cells; ++i)
+    for (int j = 0; j + 1 < cells; ++j) {
+      const double z = std::max(std::max(vertices[i * cells + j].z(), vertices[i * cells + j + 1].z()),
+                                std::max(vertices[(i + 1) * cells + j].z(), vertices[(i + 1) * cells + j + 1].z()));
+      const int a0 = std::min(s.blocks - 1, int(std::floor(i * h / s.block)));
+      const int a1 = std::min(s.blocks - 1, int(std::ceil((i + 1) * h / s.block)) - 1);
+      const int b0 = std::min(s.blocks - 1, int(std::floor(j * h / s.block)));
+      const int b1 = std::min(s.blocks - 1, int(std::ceil((j + 1) * h / s.block)) - 1);
+      for (int a = a0; a <= std::max(a0, a1); ++a)
+        for (int b = b0; b <= std::max(b0, b1); ++b) s.block_top(a, b) = std::max(s.block_top(a, b), z);
+    }
+  std::vector<fcl::Triangle> triangles;
+  triangles.reserve(2 * std::size_t(cells - 1) * (cells - 1));
+  for (int i = 0; i + 1 < cells; ++i)
+    for (int j = 0; j + 1 < cells; ++j) {
+      const int a = i * cells + j, b = (i + 1) * cells + j;
+      triangles.emplace_back(a, b, b + 1);
+      triangles.emplace_back(a, b + 1, a + 1);
+    }
+  s.terrain = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+  s.terrain->beginModel(int(triangles.size()), int(vertices.size()));
+  s.terrain->addSubModel(vertices, triangles);
+  s.terrain->endModel();
+  s.terrain->computeLocalAABB();
+  s.mid.resize(n);
+}
+
+LegCollisionChecker::~LegCollisionChecker() = default;
+
+const Eigen::Isometry3d& LegCollisionChecker::body() const { return impl_->body; }
+
+bool LegCollisionChecker::valid(const Eigen::Ref<const Eigen::VectorXd>& q_leg, bool include_wheel) {
+  Impl& s = *impl_;
+  ++checks_;
+  for (int i = 0; i < s.n; ++i)
+    if (!(q_leg[i] >= s.lower[i] && q_leg[i] <= s.upper[i])) return false;  // NaN fails too
+  model_.forward(leg_, q_leg, s.ws);
+  s.place(model_);
+  const std::size_t count = s.specs.size();
+  for (std::size_t a = 0; a < count; ++a) {
+    const bool wheel = s.specs[a].type == s.n;
+    // Terrain: skip shapes entirely above the highest terrain point (plus clearance).
+    if (!(wheel && !include_wheel)) {
+      const double bound = 0.5 * s.specs[a].length + s.specs[a].radius + s.env_clearance;
+      if (s.lowest[a] <= s.local_top(s.centres[a], bound) + s.env_clearance + 1e-9 &&
+          s.hit(s.inflated[a][0], s.poses[a], s.terrain.get(), fcl::Transform3d::Identity()))
+        return false;
+    }
+    for (const Obstacle& o : s.obstacles) {
+      const GeometryPtr& g = s.inflated[a][2 + o.type];
+      if (!g) continue;
+      const double reach = 0.5 * s.specs[a].length + s.specs[a].radius + s.table(s.specs[a].type, o.type);
+      if ((s.centres[a] - o.centre).norm() > reach + o.bound) continue;
+      if (s.hit(g, s.poses[a], o.geometry.get(), o.pose)) return false;
+    }
+  }
+  for (const auto& pr : s.own_pairs) {
+    const ShapeSpec &sa = s.specs[pr[0]], &sb = s.specs[pr[1]];
+    const double reach = 0.5 * (sa.length + sb.length) + sa.radius + sb.radius + s.own_clearance;
+    if ((s.centres[pr[0]] - s.centres[pr[1]]).norm() > reach) continue;
+    // one side inflated by the clearance, the other plain
+    if (s.hit(s.inflated[pr[0]][1], s.poses[pr[0]], s.plain[pr[1]].get(), s.poses[pr[1]])) return false;
+  }
+  return true;
+}
+
+bool LegCollisionChecker::motion_valid(const Eigen::Ref<const Eigen::VectorXd>& a,
+                                       const Eigen::Ref<const Eigen::VectorXd>& b, double epsilon,
+                                       bool include_wheel) {
+  require_positive("motion_valid", "epsilon", epsilon);
+  Impl& s = *impl_;
+  if (!valid(b, include_wheel)) return false;
+  const double length = (b - a).cwiseAbs().maxCoeff();
+  if (!(length > epsilon)) return std::isfinite(length);
+  // Level-by-level bisection (§3.4.1): the midpoint of every sub-interval of a level is checked
+  // before the next level, so a colliding middle is found early.
+  s.queue.clear();
+  s.queue.push_back({0.0, 1.0});
+  for (std::size_t head = 0; head < s.queue.size(); ++head) {
+    const auto [t0, t1] = s.queue[head];
+    if ((t1 - t0) * length <= epsilon) continue;
+    const double tm = 0.5 * (t0 + t1);
+    s.mid = a + tm * (b - a);
+    if (!valid(s.mid, include_wheel)) return false;
+    s.queue.push_back({t0, tm});
+    s.queue.push_back({tm, t1});
+  }
+  return true;
+}
+
+int first_colliding_edge(LegCollisionChecker& checker, const Eigen::Ref<const Eigen::MatrixXd>& path,
+                         double resolution, int wheel_free_edges) {
+  require_positive("first_colliding_edge", "resolution", resolution);
+  require(path.rows() == checker.model().joints_per_leg() && path.cols() >= 1 && path.allFinite(),
+          "first_colliding_edge: path must be finite, joints x waypoints (at least one)");
+  const int edges = int(path.cols()) - 1;
+  Eigen::VectorXd x(path.rows());
+  if (edges == 0) return checker.valid(path.col(0)) ? -1 : 0;
+  for (int e = 0; e < edges; ++e) {
+    const bool wheel = e >= wheel_free_edges && e < edges - wheel_free_edges;
+    const Eigen::VectorXd d = path.col(e + 1) - path.col(e);
+    const int steps = std::max(1, int(std::ceil(d.cwiseAbs().maxCoeff() / resolution)));
+    for (int k = 0; k <= steps; ++k) {
+      x = path.col(e) + (double(k) / steps) * d;
+      // an end shared with a wheel-free edge is checked without the wheel
+      const bool w = wheel && !((k == 0 && e == wheel_free_edges && e > 0) ||
+                                (k == steps && e == edges - wheel_free_edges - 1 && wheel_free_edges > 0));
+      if (!checker.valid(x, w)) return e;
+    }
+  }
+  return -1;
+}
+
+}  // namespace ernest::footfall

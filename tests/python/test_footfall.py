@@ -1,0 +1,97 @@
+"""ernest_cpp.footfall from Python: the stability map as numpy arrays (green/red/none), a planned
+step re-checked densely with numpy-side sampling, ValueError for NaN input and bad options, the
+explicit no-plan answers, and `ernest footfall` run small."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ernest_cpp import dynamics as D
+from ernest_cpp import footfall as F
+from ernest_cpp import walker as W
+from ernest_cpp.cli import main
+
+
+@pytest.fixture(scope="module")
+def scene():
+    model = W.WalkerModel(W.sdm_b_parameters())
+    body, q = model.standard_body_pose(), model.standard_configuration
+    feet = model.contact_points(body, q)
+    return model, body, q, feet, F.rock_field(F.RockFieldOptions(), feet[:2])
+
+
+def test_stability_map_arrays_and_plot(scene, tmp_path):
+    model, body, q, feet, terrain = scene
+    o = F.StabilityMapOptions()
+    o.cell = 0.05
+    m = F.stability_map(model, terrain, body, q, 0, o)
+    st = m["status"]
+    assert st.dtype == np.uint8 and st.shape == (m["x"].size, m["y"].size)
+    assert set(np.unique(st)) <= {0, 1, 2} and (st == 2).sum() > 50
+    assert np.all(np.isnan(m["margin"][st == 0])) and np.all(m["margin"][st == 2] > 0)
+    # cells outside the reach are never reachable
+    xx, yy = np.meshgrid(m["x"], m["y"], indexing="ij")
+    far = np.hypot(xx - m["hip"][0], yy - m["hip"][1]) > m["reach"]
+    assert np.all(st[far] == 0)
+    F.plot_stability_map(m, tmp_path / "map.png", terrain, feet)
+    assert (tmp_path / "map.png").stat().st_size > 10_000
+
+
+def test_step_is_free_when_sampled_densely(scene):
+    model, body, q, feet, terrain = scene
+    so = F.StepOptions()
+    so.map.cell = 0.05
+    step = F.plan_step(model, terrain, body, q, 0, feet[0, 0] + 0.35, feet[1, 0], so)
+    assert step.solved, step.reason
+    assert step.smoothing.length <= step.plan.length + 1e-12
+    exact = F.CollisionOptions()
+    exact.environment_clearance = exact.own_leg_clearance = 0.0
+    exact.clearance_table = np.zeros((7, 8))
+    checker = F.LegCollisionChecker(model, terrain, step.planning_body, q, 0, exact)
+    path = step.path
+    # every 1e-3 rad along the edges between the waypoints above start and goal, with the wheel
+    for k in range(1, path.shape[1] - 2):
+        a, b = path[:, k], path[:, k + 1]
+        n = max(1, math.ceil(np.abs(b - a).max() / 1e-3))
+        assert all(checker.valid(a + t * (b - a)) for t in np.linspace(0, 1, n + 1))
+    sag = F.predict_swing_sag(model, body, q, 0)
+    assert np.allclose(step.planning_body, sag.sagged_body)
+    assert sag.hip_drop[0] > 0
+
+
+def test_errors_and_no_plan(scene):
+    model, body, q, feet, terrain = scene
+    with pytest.raises(ValueError, match="goal_x"):
+        F.plan_step(model, terrain, body, q, 0, float("nan"), 0.0)
+    o = F.PlannerOptions()
+    o.time_limit = -1.0
+    with pytest.raises(ValueError, match="time_limit"):
+        o.validate()
+    with pytest.raises(ValueError):
+        D.HeightMap(np.zeros((0, 0)), 0.05, 0.0, 0.0)  # an empty map
+    far = F.plan_step(model, terrain, body, q, 0, 20.0, 0.0)
+    assert far.status == F.PlanStatus.NoPlan and "unreachable" in far.reason
+    checker = F.LegCollisionChecker(model, terrain, body, q, 0)
+    planner = F.LegPlanner(checker)
+    r = planner.plan(q[:, 0], q[:, 0])
+    assert not r.solved and r.reason == "start in collision"
+    bad = q[:, 0].copy()
+    bad[1] = np.nan
+    with pytest.raises(ValueError):
+        planner.plan(bad, q[:, 0])
+
+
+def test_footfall_command_small(tmp_path):
+    out = tmp_path / "ff"
+    assert main(["footfall", "--out", str(out), "--steps", "2", "--cell", "0.06", "--rocks", "8"]) == 0
+    r = json.loads((out / "footfall.json").read_text())
+    assert len(r["steps"]) == 2 and r["steps"][0]["leg"] == 0
+    assert any(s["solved"] for s in r["steps"])
+    for s in r["steps"]:
+        if s["solved"]:
+            assert s["smoothed_length"] <= s["raw_length"] + 1e-9 and s["hip_sag_cm"] > 0
+            assert (out / f"step{s['step']}_leg{s['leg']}_path.png").exists()
+        assert (out / f"step{s['step']}_leg{s['leg']}_map.png").exists()
+    assert "| step | leg |" in (out / "footfall_report.md").read_text()
