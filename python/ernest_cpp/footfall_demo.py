@@ -3,8 +3,10 @@ field, as at D-RATS 2010 (seed 003 §6, Fig. 19), with FootFall's planning core:
 stability map of the leg (§3.3, PNG), the goal (the stable cell nearest a stride ahead), the sag
 predicted with the leg in the air (§4.1, §5.1), SBL between the compliance waypoints against that
 sagged pose (§3.4.1), the Dijkstra–bisection smoothing (§3.4.2, PNG), then a body shift over the
-planted feet. Writes footfall.json and footfall_report.md. The leg order is a fixed sequence
-(front to rear); the gait planner of §5.3.1 is a separate piece."""
+planted feet; the legs step in the reverse-wave order of the gait planner (§5.3.1). Then the gait
+planner's skeleton gait on flat ground and, in the ODE walker simulator, the Moses Lake lesson
+(§4.1): a swing planned against the rigid pose hits a rock, one planned against the sag model's
+pose clears it (``footfall_gait``). Writes footfall.json and footfall_report.md."""
 
 from __future__ import annotations
 
@@ -20,8 +22,6 @@ from . import dynamics as D
 from . import footfall as F
 from . import walker as W
 
-#: Leg order of one cycle, walking along +x (leg 0 points along +x; legs counter-clockwise).
-ORDER = (0, 1, 5, 2, 4, 3)
 
 
 def _stance_q(model, terrain, body, feet, q, mo):
@@ -55,6 +55,9 @@ def run(out: Path, steps: int = 6, stride: float = 0.4, seed: int = 3, cell: flo
         rocks: int = 40, log=print) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     model = W.WalkerModel(W.sdm_b_parameters())
+    # one cycle walking along +x: the gait planner's reverse wave (§5.3.1; front to rear, left of
+    # the direction of travel first)
+    order = tuple(W.reverse_wave_sequence(model, 0.0))
     body = np.array(model.standard_body_pose())
     q = np.array(model.standard_configuration)
     feet = np.array(model.contact_points(body, q))
@@ -73,7 +76,7 @@ def run(out: Path, steps: int = 6, stride: float = 0.4, seed: int = 3, cell: flo
     rows = []
     t_all = time.perf_counter()
     for k in range(steps):
-        leg = ORDER[k % len(ORDER)]
+        leg = order[k % len(order)]
         t0 = time.perf_counter()
         arrays = F.stability_map(model, terrain, body, q, leg, mo)
         t_map = time.perf_counter() - t0
@@ -115,13 +118,21 @@ def run(out: Path, steps: int = 6, stride: float = 0.4, seed: int = 3, cell: flo
                f"{row['raw_length']:.2f} -> {row['smoothed_length']:.2f} rad, swing-hip sag {row['hip_sag_cm']:.1f} cm"
                if row["solved"] else f"no plan: {row['reason']}"))
         rows.append(row)
-        if (k + 1) % len(ORDER) == 0:  # every foot moved: shift the body over them
+        if (k + 1) % len(order) == 0:  # every foot moved: shift the body over them
             body = body.copy()
             body[0, 3] += stride
             q = _stance_q(model, terrain, body, feet, q, mo)
             log(f"[footfall] body shift +{stride:.2f} m")
+    log("[footfall] gait plan on flat ground (§5.3.1) and the Moses Lake scenario in ODE (§4.1) ...")
+    from . import footfall_gait
+
+    t0 = time.perf_counter()
+    gait = footfall_gait.demo(out)
+    log(f"[footfall] gait: steps {min(gait['step_lengths']):.3f}..{max(gait['step_lengths']):.3f} m, "
+        f"rigid plan executed clearance {100 * gait['rigid_executed_clearance']:.1f} cm, compensated "
+        f"{100 * gait['compensated_executed_clearance']:.1f} cm ({time.perf_counter() - t0:.1f} s)")
     result = {"steps": rows, "stride_m": stride, "lift_m": mo.lift_height, "min_margin_m": mo.min_margin, "seed": seed, "cell_m": cell, "rocks": rocks,
-              "seconds": time.perf_counter() - t_all}
+              "gait": gait, "seconds": time.perf_counter() - t_all}
     (out / "footfall.json").write_text(json.dumps(result, indent=2))
     _report(out, result)
     return result
@@ -149,6 +160,21 @@ def _report(out: Path, r: dict) -> None:
               "Maps: green stable, red unstable, uncoloured unreachable (§3.3). Paths: the wheel "
               "centre's track over the terrain under the step, SBL's plan against the sagged pose and "
               "the smoothed one through the compliance waypoints above start and goal.", ""]
+    g = r["gait"]
+    lines += ["## Skeleton gait and execution in simulation (§5.3.1, §4.1)", "",
+              f"Reverse-wave order {g['sequence']} on flat ground: step lengths "
+              f"{min(g['step_lengths']):.3f}–{max(g['step_lengths']):.3f} m, body shifts "
+              f"{min(g['shift_lengths']):.3f}–{max(g['shift_lengths']):.3f} m, smallest support margin "
+              f"{g['min_support_margin']:.3f} m, planned in {g['gait_plan_seconds']:.2f} s"
+              + (f"; periodic after the second cycle to {1e3 * g['periodicity_error']:.2f} mm." if g['periodicity_error'] == g['periodicity_error'] else "."), "",
+              "The same swing over a rock, executed in the ODE walker (compliant wheels, eq 3):", "",
+              "| plan made against | lift [cm] | clearance on paper [cm] | clearance executed [cm] |", "|---|---|---|---|",
+              f"| the rigid pose | {100 * g['rigid_lift']:.1f} | {100 * g['rigid_planned_clearance']:.2f} | "
+              f"{100 * g['rigid_executed_clearance']:.2f} |",
+              f"| the sag model's pose | {100 * g['compensated_lift']:.1f} | {100 * g['compensated_planned_clearance']:.2f} | "
+              f"{100 * g['compensated_executed_clearance']:.2f} |", "",
+              f"Simulator sag vs the sag model: {1e3 * g['sag_error_six']:.2f} mm (six feet down), "
+              f"{1e3 * g['sag_error_lifted']:.2f} mm (leg lifted). ![gait](footfall_gait.png)", ""]
     for s in r["steps"]:
         name = f"step{s['step']}_leg{s['leg']}"
         lines.append(f"![{name} map]({name}_map.png)")
