@@ -1,0 +1,150 @@
+"""``ernest train --backend ray``: the learner and replay buffer in this (driver) process, the
+simulations in Ray rollout actors (ray_backend.py), in one of two modes (``ray.mode``):
+
+* ``sync``: the workers step in lockstep with the learner exactly like the local trainer's vector
+  env: the driver computes all actions in one batch with its actor and exploration generator, the
+  workers step their simulations, and the reset seeds are the local ones, so a run equals
+  ``--backend local`` with the same ``env.num_envs`` (= num_workers * envs_per_worker) and seed bit
+  for bit, and the checkpoints are interchangeable.
+* ``async``: throughput first. Each worker collects ``collect_steps`` vector steps at a time with
+  its own actor copy (new weights through the object store every ``weight_sync_updates`` learner
+  updates) and its own exploration generator; the learner adds each batch when it arrives and
+  updates meanwhile. Which batch arrives first depends on timing, so runs are reproducible in
+  distribution, not bitwise. The weight lag (learner updates since the weights a batch was
+  collected with) is logged per worker.
+
+Checkpoints hold the same state as the local trainer's (the driver's exploration state is the
+reset one a checkpoint cut leaves), so a Ray checkpoint resumes with Ray or locally.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .ray_backend import RayVectorEnv, connect, weights_to_numpy
+from .trainer import Trainer, make_env, resolve_env_id
+
+MODES = ("sync", "async")
+
+
+def ray_settings(cfg: dict) -> dict:
+    """The validated ``ray`` section; env.num_envs must be num_workers * envs_per_worker."""
+    rc = dict(cfg["ray"])
+    for key in ("num_workers", "envs_per_worker", "collect_steps", "weight_sync_updates",
+                "object_store_mb"):
+        if not isinstance(rc[key], int) or rc[key] < 1:
+            raise ValueError(f"ray.{key} = {rc[key]!r} must be a whole number >= 1")
+    if rc["mode"] not in MODES:
+        raise ValueError(f"ray.mode = {rc['mode']!r}; choose sync or async")
+    n = rc["num_workers"] * rc["envs_per_worker"]
+    if int(cfg["env"]["num_envs"]) != n:
+        raise ValueError(f"env.num_envs = {cfg['env']['num_envs']} differs from ray.num_workers * "
+                         f"ray.envs_per_worker = {n}")
+    return rc
+
+
+class RayTrainer(Trainer):
+    def __init__(self, cfg: dict, run_dir: str, resume: bool = False, log=print):
+        self.rc = ray_settings(cfg)
+        connect(self.rc["address"], self.rc["object_store_mb"])
+        super().__init__(cfg, run_dir, resume, log)
+
+    def _make_vec(self):
+        probe = self.eval_env if self.eval_env is not None else make_env(
+            resolve_env_id(self.cfg["env"]), self.cfg["env"].get("kwargs"))
+        vec = RayVectorEnv(self.env_id, self.rc["num_workers"], self.rc["envs_per_worker"],
+                           self.cfg["env"], self.cfg["td3"], self.cfg["exploration"],
+                           probe.observation_space, probe.action_space)
+        self.lag = np.zeros(vec.num_workers)  # learner updates behind, per worker
+        return vec
+
+    # ------------------------------------------------------------------ logging
+    def _begin(self, total_steps):
+        run = super()._begin(total_steps)
+        run.w0 = self.vec.env_steps.copy()
+        return run
+
+    def _perf(self, run) -> dict:
+        out = super()._perf(run)
+        dt = max(time.perf_counter() - run.t0, 1e-9)
+        for w in range(self.vec.num_workers):
+            out[f"worker{w}/steps_per_second"] = (self.vec.env_steps[w] - run.w0[w]) / dt
+            out[f"worker{w}/weight_lag"] = float(self.lag[w])
+            out[f"worker{w}/restarts"] = self.vec.restarts[w]
+        return out
+
+    # ------------------------------------------------------------------ loops
+    def train(self, total_steps: int | None = None) -> dict:
+        if self.rc["mode"] == "sync":
+            return super().train(total_steps)  # lockstep: the local loop on RayVectorEnv
+        return self._train_async(total_steps)
+
+    def _publish(self) -> None:
+        """Put the actor's weights in the object store once; workers fetch them by reference."""
+        self.weights_ref = self.vec.ray.put(weights_to_numpy(self.agent.actor))
+        self.version = self.agent.updates
+
+    def _train_async(self, total_steps: int | None) -> dict:
+        run = self._begin(total_steps)
+        ray, vec, rc = self.vec.ray, self.vec, self.rc
+        steps, m = rc["collect_steps"], vec.m
+        random_steps = int(self.cfg["random_steps"])
+        pending: dict = {}  # object ref -> worker index
+        held = [None] * vec.num_workers  # weight version each worker holds
+
+        def submit(w: int) -> None:
+            new = held[w] != self.version
+            ref = vec.workers[w].collect.remote(steps, self.weights_ref if new else None,
+                                                self.version, self.step < random_steps)
+            held[w] = self.version
+            pending[ref] = w
+
+        def receive(ref) -> bool:
+            """Add one batch; True when a checkpoint is due."""
+            w = pending.pop(ref)
+            try:
+                b = ray.get(ref)
+            except ray.exceptions.RayActorError:
+                self.lost_transitions += steps * m
+                self.log(f"ray worker {w} died: {steps * m} env steps lost "
+                         f"({self.lost_transitions} in all); restarting it")
+                vec.restart(w)
+                held[w] = None
+                return False
+            if len(b["rew"]):
+                self.buffer.add(b["obs"], b["act"], b["rew"], b["next_obs"], b["term"])
+            for ret, length in b["episodes"]:
+                self._episode_done(run, ret, length)
+            self.lag[w] = self.agent.updates - b["version"]
+            vec.env_steps[w] += b["env_steps"]
+            vec.step_seconds[w] += b["seconds"]
+            due = self._advance(run, len(b["rew"]))
+            if self.agent.updates - self.version >= rc["weight_sync_updates"]:
+                self._publish()
+            return due
+
+        def drain() -> bool:
+            due = False
+            while pending:
+                due |= receive(next(iter(pending)))
+            return due
+
+        self._reset_envs()
+        self._publish()
+        for w in range(vec.num_workers):
+            submit(w)
+        while self.step < run.total:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            w = pending[ready[0]]
+            if receive(ready[0]):
+                drain()  # the in-flight batches belong to this segment
+                run.last_ck = self.step
+                self._checkpoint_and_cut()  # workers reset with the new segment's seeds
+                for k in range(vec.num_workers if self.step < run.total else 0):
+                    submit(k)
+            elif self.step < run.total:
+                submit(w)
+        drain()
+        return self._finish(run)
