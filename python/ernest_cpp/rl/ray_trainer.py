@@ -75,6 +75,10 @@ class RayTrainer(Trainer):
             out[f"worker{w}/restarts"] = self.vec.restarts[w]
         return out
 
+    def _bar_extra(self, perf: dict) -> str:
+        return "; " + ", ".join(f"w{w} {perf[f'worker{w}/steps_per_second']:.0f}/s lag "
+                                f"{self.lag[w]:.0f}" for w in range(self.vec.num_workers))
+
     # ------------------------------------------------------------------ loops
     def train(self, total_steps: int | None = None) -> dict:
         if self.rc["mode"] == "sync":

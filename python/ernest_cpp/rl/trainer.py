@@ -612,6 +612,9 @@ class Trainer:
                 "updates_per_second": (self.agent.updates - run.u0) / dt,
                 "lost_transitions": self.lost_transitions}
 
+    def _bar_extra(self, perf: dict) -> str:
+        return ""
+
     def _advance(self, run, added: int) -> bool:
         """Count ``added`` transitions, learn, log, evaluate; True when a checkpoint is due (the
         caller then saves it and cuts the episodes)."""
@@ -632,7 +635,8 @@ class Trainer:
                     run.writer.add_scalar(f"train/{key}", float(np.mean(v)), self.step)
                 run.stats.clear()
             rec = f"{np.mean(self.recent):.2f}" if self.recent else "-"
-            extra = f", lost {self.lost_transitions}" if self.lost_transitions else ""
+            extra = (f", lost {self.lost_transitions}" if self.lost_transitions else "") + \
+                self._bar_extra(perf)
             run.bar.set_postfix_str(f"{perf['steps_per_second']:.0f} steps/s, "
                                     f"{perf['updates_per_second']:.0f} updates/s, return(last "
                                     f"{len(self.recent)}) {rec}{extra}")
