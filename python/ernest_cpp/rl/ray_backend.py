@@ -188,6 +188,7 @@ class RayVectorEnv:
 
         self.metadata = {"autoreset_mode": AutoresetMode.SAME_STEP if ar == "same"
                          else AutoresetMode.NEXT_STEP}
+        self.log = print
         self.seeds = [0] * self.num_envs
         self.explore_seeds = [0] * self.num_workers
 
@@ -215,6 +216,8 @@ class RayVectorEnv:
         """Replace dead worker ``w``; its simulations restart from fresh seeds (module doc)."""
         self.ray.kill(self.workers[w], no_restart=True)
         self.restarts[w] += 1
+        self.log(f"ray worker {w} died: restarting it (restart {self.restarts[w]}), its "
+                 f"simulations reseeded")
         self.workers[w] = self._cls.remote(*self._args)
         seeds = restart_seeds(self.seeds[self._slice(w)], self.restarts[w])
         ex = restart_seeds([self.explore_seeds[w]], self.restarts[w])[0]

@@ -58,6 +58,7 @@ class RayTrainer(Trainer):
                            self.cfg["env"], self.cfg["td3"], self.cfg["exploration"],
                            probe.observation_space, probe.action_space)
         self.lag = np.zeros(vec.num_workers)  # learner updates behind, per worker
+        vec.log = self.log
         return vec
 
     # ------------------------------------------------------------------ logging
@@ -112,8 +113,8 @@ class RayTrainer(Trainer):
                 b = ray.get(ref)
             except ray.exceptions.RayActorError:
                 self.lost_transitions += steps * m
-                self.log(f"ray worker {w} died: {steps * m} env steps lost "
-                         f"({self.lost_transitions} in all); restarting it")
+                self.log(f"ray worker {w}: {steps * m} env steps lost "
+                         f"({self.lost_transitions} in all)")
                 vec.restart(w)
                 held[w] = None
                 return False

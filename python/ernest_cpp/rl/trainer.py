@@ -551,6 +551,7 @@ class Trainer:
                 nxt, term, trunc, info, self.autoreset, self.pending_reset, lost)
             if lost is not None:
                 self.lost_transitions += int(np.sum(lost))
+                self.log(f"{int(np.sum(lost))} env steps lost ({self.lost_transitions} in all)")
                 self.ep_ret[lost], self.ep_len[lost] = 0.0, 0  # the episode is gone, not counted
             if valid.all():
                 self.buffer.add(obs, a, r, real_next, term)
