@@ -75,6 +75,10 @@ def _train(args) -> int:
             raise ValueError("--resume continues with the run's saved settings; use --set to "
                              "change one")
         cfg = load_checkpoint(args.run_dir, with_buffer=False)["state"]["config"]
+        if "ray" not in cfg:  # saved before the Ray backend existed
+            from .config import load_preset
+
+            cfg["ray"] = load_preset("quick")["ray"]
         if extra:
             cfg = merge(cfg, extra)
         for o in args.set:
