@@ -55,7 +55,7 @@ def main():
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load average "
           f"{os.getloadavg()[0]:.1f}")
     # Logical CPUs only: the idle trainers' workers wait without using a core.
-    ray.init(num_cpus=6, include_dashboard=False, object_store_memory=200 << 20,
+    ray.init(address="local", num_cpus=6, include_dashboard=False, object_store_memory=200 << 20,
              log_to_driver=False, configure_logging=False)
     tmp = tempfile.mkdtemp(prefix="bench_ray_")
     variants = {"local (1 core)": (Trainer, config(1, "sync")),

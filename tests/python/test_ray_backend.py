@@ -30,7 +30,7 @@ from ernest_cpp.rl.trainer import Trainer, load_checkpoint  # noqa: E402
 
 @pytest.fixture(scope="module")
 def cluster():
-    ray.init(num_cpus=2, include_dashboard=False, object_store_memory=80 << 20,
+    ray.init(address="local", num_cpus=2, include_dashboard=False, object_store_memory=80 << 20,
              log_to_driver=False, configure_logging=False)
     yield ray
     ray.shutdown()

@@ -43,7 +43,8 @@ def connect(address: str | None = None, object_store_mb: int = 200):
         if address:
             ray.init(address=address, **kw)
         else:
-            ray.init(object_store_memory=int(object_store_mb) << 20, **kw)
+            # "local": a new cluster even if RAY_ADDRESS or a `ray start` node is around
+            ray.init(address="local", object_store_memory=int(object_store_mb) << 20, **kw)
     return ray
 
 
