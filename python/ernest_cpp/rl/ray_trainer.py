@@ -27,6 +27,7 @@ from .ray_backend import RayVectorEnv, connect, weights_to_numpy
 from .trainer import Trainer, make_env, resolve_env_id
 
 MODES = ("sync", "async")
+IN_FLIGHT = 2  # async: collection calls queued per worker, so it never waits for the learner
 
 
 def ray_settings(cfg: dict) -> dict:
@@ -96,7 +97,7 @@ class RayTrainer(Trainer):
         ray, vec, rc = self.vec.ray, self.vec, self.rc
         steps, m = rc["collect_steps"], vec.m
         random_steps = int(self.cfg["random_steps"])
-        pending: dict = {}  # object ref -> worker index
+        pending: dict = {}  # object ref -> (worker index, the actor handle called)
         held = [None] * vec.num_workers  # weight version each worker holds
 
         def submit(w: int) -> None:
@@ -104,20 +105,24 @@ class RayTrainer(Trainer):
             ref = vec.workers[w].collect.remote(steps, self.weights_ref if new else None,
                                                 self.version, self.step < random_steps)
             held[w] = self.version
-            pending[ref] = w
+            pending[ref] = (w, vec.workers[w])
 
-        def receive(ref) -> bool:
-            """Add one batch; True when a checkpoint is due."""
-            w = pending.pop(ref)
+        def receive(ref) -> tuple[bool, bool]:
+            """Add one batch: (a checkpoint is due, the worker wants a new call)."""
+            w, handle = pending.pop(ref)
             try:
                 b = ray.get(ref)
             except ray.exceptions.RayActorError:
-                self.lost_transitions += steps * m
+                self.lost_transitions += steps * m  # each of the dead actor's calls once
                 self.log(f"ray worker {w}: {steps * m} env steps lost "
                          f"({self.lost_transitions} in all)")
+                if handle is not vec.workers[w]:
+                    return False, False  # a queued call of an actor already replaced
                 vec.restart(w)
                 held[w] = None
-                return False
+                for _ in range(IN_FLIGHT - 1):  # the replacement's queue (the caller adds one)
+                    submit(w)
+                return False, True
             if len(b["rew"]):
                 self.buffer.add(b["obs"], b["act"], b["rew"], b["next_obs"], b["term"])
             for ret, length in b["episodes"]:
@@ -128,28 +133,29 @@ class RayTrainer(Trainer):
             due = self._advance(run, len(b["rew"]))
             if self.agent.updates - self.version >= rc["weight_sync_updates"]:
                 self._publish()
-            return due
+            return due, True
 
-        def drain() -> bool:
-            due = False
+        def drain() -> None:
             while pending:
-                due |= receive(next(iter(pending)))
-            return due
+                receive(next(iter(pending)))
+
+        def fill() -> None:
+            for k in range(vec.num_workers * IN_FLIGHT if self.step < run.total else 0):
+                submit(k % vec.num_workers)
 
         self._reset_envs()
         self._publish()
-        for w in range(vec.num_workers):
-            submit(w)
+        fill()
         while self.step < run.total:
             ready, _ = ray.wait(list(pending), num_returns=1)
-            w = pending[ready[0]]
-            if receive(ready[0]):
+            w = pending[ready[0]][0]
+            due, again = receive(ready[0])
+            if due:
                 drain()  # the in-flight batches belong to this segment
                 run.last_ck = self.step
                 self._checkpoint_and_cut()  # workers reset with the new segment's seeds
-                for k in range(vec.num_workers if self.step < run.total else 0):
-                    submit(k)
-            elif self.step < run.total:
+                fill()
+            elif again and self.step < run.total:
                 submit(w)
         drain()
         return self._finish(run)
