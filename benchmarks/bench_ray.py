@@ -4,8 +4,11 @@ rollout workers, and the Ray path's overhead per transition. Reference in the sa
 trainer. Policy actions with the §4.4 exploration (random_steps 0), no learning (the collection
 rate), interleaved repeats, medians.
 
-Overhead per transition = 1/rate(Ray, 1 worker) - 1/rate(local), both with 4 simulations in one
-simulation process; compared with a policy step, 1/rate(local) (simulation + actor + exploration).
+Overhead per transition: the CPU time (of the driver and the worker processes, from /proc, so
+other load on the machine does not count) per collected transition on the Ray path minus the local
+trainer's; a policy step is the local trainer's CPU time per transition (simulation, actor,
+exploration, replay). Both with 4 simulations in one simulation process. Wall-clock rates are
+printed too; they only mean something on an idle machine (the script prints the load average).
 Targets: Ray 2 workers >= 1.7x local; overhead <= 10 % of a policy step.
 
     ./run bench ray [--steps 640] [--repeats 5]
@@ -40,10 +43,24 @@ def config(workers: int, mode: str) -> dict:
     return build_config("quick", None, sets)
 
 
-def rate(tr: Trainer, steps: int) -> float:
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a process, all its threads (Linux /proc)."""
+    with open(f"/proc/{pid}/stat") as fh:
+        fields = fh.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+def rate(tr: Trainer, steps: int) -> tuple[float, float]:
+    """(transitions per wall second, CPU seconds per transition) of one stretch of collection."""
+    pids = [os.getpid()] + (tr.vec.pids() if isinstance(tr, RayTrainer) else [])
+    c0 = sum(cpu_seconds(p) for p in pids)
     s0, t0 = tr.step, time.perf_counter()
     tr.train(total_steps=tr.step + steps)
-    return (tr.step - s0) / (time.perf_counter() - t0)
+    n = tr.step - s0
+    return n / (time.perf_counter() - t0), (sum(cpu_seconds(p) for p in pids) - c0) / n
 
 
 def main():
@@ -69,23 +86,24 @@ def main():
         rate(tr, ENVS * 8 * 2)  # warm-up: actors built, first batches through
         trainers[name] = tr
     rates = {name: [] for name in trainers}
+    cpus = {name: [] for name in trainers}
     for _ in range(args.repeats):
         for name, tr in trainers.items():
-            rates[name].append(rate(tr, args.steps))
+            r, c = rate(tr, args.steps)
+            rates[name].append(r)
+            cpus[name].append(c)
     med = {name: statistics.median(r) for name, r in rates.items()}
+    cpu = {name: statistics.median(c) * 1e6 for name, c in cpus.items()}
     loc = med["local (1 core)"]
     print(f"\n{args.steps} transitions per repeat, {args.repeats} repeats interleaved, medians; "
           f"{ENVS} simulations per process")
-    print("| collector | env steps/s | / local |")
-    print("|---|---|---|")
+    print("| collector | env steps/s (wall) | / local | CPU us per transition | overhead |")
+    print("|---|---|---|---|---|")
+    step_us = cpu["local (1 core)"]
     for name, v in med.items():
-        print(f"| {name} | {v:.0f} | {v / loc:.2f}x |")
-    step_us = 1e6 / loc
-    for name in ("Ray sync, 1 worker", "Ray async, 1 worker"):
-        over = statistics.median([1e6 / a - 1e6 / b for a, b in
-                                  zip(rates[name], rates["local (1 core)"])])
-        print(f"{name}: overhead {over:.0f} us per transition = {100 * over / step_us:.1f} % of "
-              f"a policy step ({step_us:.0f} us)")
+        over = cpu[name] - step_us
+        print(f"| {name} | {v:.0f} | {v / loc:.2f}x | {cpu[name]:.0f} | "
+              f"{over:+.0f} us = {100 * over / step_us:+.1f} % |")
     print(f"Ray async 2 workers / local: {med['Ray async, 2 workers'] / loc:.2f}x (target 1.7x)")
     print(f"load average after: {os.getloadavg()[0]:.1f}")
     for tr in trainers.values():
