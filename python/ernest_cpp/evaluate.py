@@ -175,12 +175,11 @@ def _save(fig, out_dir, name):
     return path
 
 
-def course_episode(course: int, name: str, policy_file: str | None, seed: int):
+def course_episode(env_id: str, kwargs: dict, name: str, policy_file: str | None, seed: int):
     """One (course, controller) episode in a fresh process (a Ray task of ``--backend ray``):
     (metrics, history, a stand-in env with the scenario's obstacles, last info, seconds)."""
     from types import SimpleNamespace
 
-    _, env_id, kwargs = COURSES[course]
     policy, passive = controllers(policy_file)[name]
     t0 = time.perf_counter()
     metrics, history, env, info = run_episode(env_id, kwargs, policy, passive, seed)
@@ -200,9 +199,9 @@ def run(args: argparse.Namespace) -> int:
         from .rl.ray_backend import fan_out
 
         policy_file = os.path.abspath(args.policy) if args.policy else None  # read on the nodes
-        jobs = [(c, name, policy_file, args.seed) for c in range(len(COURSES)) for name in ctrls]
-        remote = dict(zip([(c, name) for c, name, _, _ in jobs],
-                          fan_out(course_episode, jobs, args.ray_address)))
+        keys = [(c, name) for c in range(len(COURSES)) for name in ctrls]
+        jobs = [(COURSES[c][1], COURSES[c][2], name, policy_file, args.seed) for c, name in keys]
+        remote = dict(zip(keys, fan_out(course_episode, jobs, args.ray_address)))
     elif getattr(args, "ray_address", None):
         raise ValueError("--ray-address needs --backend ray")
     for c, (label, env_id, kwargs) in enumerate(COURSES):
