@@ -154,3 +154,20 @@ def test_point_mass_learns_through_async_mode(cluster, tmp_path):
     cont = Trainer(cfg, str(tmp_path / "run"), resume=True)
     assert cont.step == res["step"]
     cont.close()
+
+
+def test_evaluate_fans_its_episodes_out_with_the_same_report(cluster, tmp_path, monkeypatch):
+    from ernest_cpp import cli, evaluate
+
+    # two short courses (2 s episodes) keep it fast; the tasks get the courses with the job
+    monkeypatch.setattr(evaluate, "COURSES", [
+        ("Bickler trap (M90)", "ernest/BicklerTrap-v0", {"episode_length": 2.0}),
+        ("20 deg slope, dry M90", "ernest/SlopeEval-v0", {"soil": "m90", "episode_length": 2.0})])
+    tables = []
+    for backend in ("local", "ray"):
+        out = tmp_path / backend
+        assert cli.main(["evaluate", "--out", str(out), "--no-video", "--backend", backend]) == 0
+        tables.append([ln for ln in (out / "report.md").read_text().splitlines()
+                       if ln.startswith("| ")])
+        assert (out / "paths.png").stat().st_size > 1000
+    assert tables[0] == tables[1] and len(tables[0]) == 1 + 4  # the header, 2 x 2 episodes
