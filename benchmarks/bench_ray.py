@@ -4,11 +4,11 @@ rollout workers, and the Ray path's overhead per transition. Reference in the sa
 trainer. Policy actions with the §4.4 exploration (random_steps 0), no learning (the collection
 rate), interleaved repeats, medians.
 
-Overhead per transition: the CPU time (of the driver and the worker processes, from /proc, so
-other load on the machine does not count) per collected transition on the Ray path minus the local
-trainer's; a policy step is the local trainer's CPU time per transition (simulation, actor,
-exploration, replay). Both with 4 simulations in one simulation process. Wall-clock rates are
-printed too; they only mean something on an idle machine (the script prints the load average).
+Overhead per transition of the Ray path: 1/rate(Ray) - 1/rate(local) in wall time (medians of
+the paired repeats), against a policy step = 1/rate(local) (simulation, actor, exploration,
+replay), both with 4 simulations in one simulation process; and the same in CPU time (driver and
+worker processes, from /proc). Both only mean something on an idle machine: under load, more
+processes get more time slices (the script prints the load average).
 Targets: Ray 2 workers >= 1.7x local; overhead <= 10 % of a policy step.
 
     ./run bench ray [--steps 640] [--repeats 5]
@@ -97,13 +97,17 @@ def main():
     loc = med["local (1 core)"]
     print(f"\n{args.steps} transitions per repeat, {args.repeats} repeats interleaved, medians; "
           f"{ENVS} simulations per process")
-    print("| collector | env steps/s (wall) | / local | CPU us per transition | overhead |")
-    print("|---|---|---|---|---|")
-    step_us = cpu["local (1 core)"]
+    print("| collector | env steps/s (wall) | / local | overhead per transition (wall) | "
+          "CPU us per transition | overhead (CPU) |")
+    print("|---|---|---|---|---|---|")
+    step_us, step_cpu = 1e6 / loc, cpu["local (1 core)"]
     for name, v in med.items():
-        over = cpu[name] - step_us
-        print(f"| {name} | {v:.0f} | {v / loc:.2f}x | {cpu[name]:.0f} | "
-              f"{over:+.0f} us = {100 * over / step_us:+.1f} % |")
+        over = statistics.median([1e6 / a - 1e6 / b for a, b in
+                                  zip(rates[name], rates["local (1 core)"])])
+        oc = cpu[name] - step_cpu
+        print(f"| {name} | {v:.0f} | {v / loc:.2f}x | {over:+.0f} us = "
+              f"{100 * over / step_us:+.1f} % | {cpu[name]:.0f} | {oc:+.0f} us = "
+              f"{100 * oc / step_cpu:+.1f} % |")
     print(f"Ray async 2 workers / local: {med['Ray async, 2 workers'] / loc:.2f}x (target 1.7x)")
     print(f"load average after: {os.getloadavg()[0]:.1f}")
     for tr in trainers.values():
