@@ -24,12 +24,14 @@ import statistics
 import tempfile
 import time
 
-import ray
-import torch
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # as `ernest train` (commands.py)
 
-from ernest_cpp.rl.config import build_config
-from ernest_cpp.rl.ray_trainer import RayTrainer
-from ernest_cpp.rl.trainer import Trainer
+import ray  # noqa: E402
+import torch  # noqa: E402
+
+from ernest_cpp.rl.config import build_config  # noqa: E402
+from ernest_cpp.rl.ray_trainer import RayTrainer  # noqa: E402
+from ernest_cpp.rl.trainer import Trainer  # noqa: E402
 
 ENVS = 4  # simulations per process (the local trainer's vector env, each Ray worker's)
 
