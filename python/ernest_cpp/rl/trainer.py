@@ -625,10 +625,10 @@ class Trainer:
         run.bar.update(self.step - prev)
         log_every = int(cfg["log"]["every_steps"])
         ev_every, ck_every = int(cfg["eval"]["every_steps"]), int(cfg["checkpoint"]["every_steps"])
-        logging = self.step // log_every > prev // log_every
-        if logging or self.step >= run.total:
+        log_now = self.step // log_every > prev // log_every
+        if log_now or self.step >= run.total:
             perf = self._perf(run)
-            if run.writer and logging:
+            if run.writer and log_now:
                 for key, v in perf.items():
                     run.writer.add_scalar(f"perf/{key}", v, self.step)
                 run.writer.add_scalar("perf/updates", self.agent.updates, self.step)
