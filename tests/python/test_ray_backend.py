@@ -42,7 +42,8 @@ def cfg_for(workers: int, per_worker: int, **over) -> dict:
             "learning_starts=100", "total_steps=600", "eval.every_steps=300", "eval.episodes=2",
             "checkpoint.every_steps=300", "log.progress_bar=false", "log.tensorboard=false",
             "buffer_size=5000", f"env.num_envs={workers * per_worker}",
-            f"ray.num_workers={workers}", f"ray.envs_per_worker={per_worker}"]
+            f"ray.num_workers={workers}", f"ray.envs_per_worker={per_worker}",
+            "ray.learner_device=cpu"]  # the local trainer's device, also on a GPU machine
     return C.build_config("quick", None, sets + [f"{k}={v}" for k, v in over.items()])
 
 

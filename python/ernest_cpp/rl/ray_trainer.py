@@ -13,7 +13,8 @@ simulations in Ray rollout actors (ray_backend.py), in one of two modes (``ray.m
   distribution, not bitwise. The weight lag (learner updates since the weights a batch was
   collected with) is logged per worker.
 
-Checkpoints hold the same state as the local trainer's (the driver's exploration state is the
+The learner runs on ``ray.learner_device`` (``auto``: a GPU when torch sees one); the workers'
+actor copies stay on their CPUs. Checkpoints hold the same state as the local trainer's (the driver's exploration state is the
 reset one a checkpoint cut leaves), so a Ray checkpoint resumes with Ray or locally.
 """
 
@@ -37,6 +38,9 @@ def ray_settings(cfg: dict) -> dict:
                 "object_store_mb"):
         if not isinstance(rc[key], int) or rc[key] < 1:
             raise ValueError(f"ray.{key} = {rc[key]!r} must be a whole number >= 1")
+    dev = rc["learner_device"]
+    if not isinstance(dev, str) or not (dev in ("auto", "cpu") or dev.startswith("cuda")):
+        raise ValueError(f"ray.learner_device = {dev!r}; choose auto, cpu or cuda[:N]")
     if rc["mode"] not in MODES:
         raise ValueError(f"ray.mode = {rc['mode']!r}; choose sync or async")
     n = rc["num_workers"] * rc["envs_per_worker"]
@@ -51,6 +55,14 @@ class RayTrainer(Trainer):
         self.rc = ray_settings(cfg)
         connect(self.rc["address"], self.rc["object_store_mb"])
         super().__init__(cfg, run_dir, resume, log)
+
+    def _learner_device(self) -> str:
+        import torch
+
+        dev = self.rc["learner_device"]
+        if dev == "auto":
+            return "cuda" if torch.cuda.is_available() else "cpu"
+        return dev
 
     def _make_vec(self):
         probe = self.eval_env if self.eval_env is not None else make_env(

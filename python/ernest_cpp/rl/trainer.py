@@ -311,7 +311,8 @@ def _read_checkpoint(ck: str, with_buffer: bool) -> dict:
     except (OSError, json.JSONDecodeError) as exc:
         raise CorruptFileError(f"{ck}/state.json: unreadable ({exc})") from None
     try:
-        agent_sd = torch.load(os.path.join(ck, "agent.pt"), weights_only=True)
+        agent_sd = torch.load(os.path.join(ck, "agent.pt"), weights_only=True,
+                              map_location="cpu")  # a GPU learner's checkpoint loads anywhere
     except Exception as exc:  # torch raises several types for damaged zip archives
         raise CorruptFileError(f"{ck}/agent.pt: unreadable network file ({exc})") from None
     out = {"path": ck, "state": state, "agent": agent_sd}
@@ -352,7 +353,8 @@ class Trainer:
             self.vec.single_observation_space, self.vec.single_action_space)
         self.td3_cfg = TD3Config(**cfg["td3"]).validate()
         seed = int(cfg["seed"])
-        self.agent = TD3(self.obs_dim, self.act_dim, self.td3_cfg, seed=seed)
+        self.agent = TD3(self.obs_dim, self.act_dim, self.td3_cfg, seed=seed,
+                         device=self._learner_device())
         self.buffer = ReplayBuffer(int(cfg["buffer_size"]), self.obs_dim, self.act_dim)
         self.buffer.set_noise(*noise_for(cfg["noise"], self.layout))
         ex = cfg["exploration"]
@@ -378,6 +380,9 @@ class Trainer:
         os.makedirs(run_dir, exist_ok=True)
         with open(os.path.join(run_dir, "config.yaml"), "w") as fh:
             yaml.safe_dump(cfg, fh, sort_keys=False)
+
+    def _learner_device(self) -> str:
+        return "cpu"
 
     def _make_vec(self):
         ec = self.cfg["env"]
