@@ -159,9 +159,14 @@ class RayTrainer(Trainer):
         self._publish()
         fill()
         while self.step < run.total:
-            ready, _ = ray.wait(list(pending), num_returns=1)
-            w = pending[ready[0]][0]
-            due, again = receive(ready[0])
+            first, _ = ray.wait(list(pending), num_returns=1)
+            # the oldest call among those done: when the learner is the bottleneck, every worker's
+            # batches still get their turn (ray.wait's pick could favour one worker)
+            done = set(first) | set(ray.wait(list(pending), num_returns=len(pending),
+                                              timeout=0)[0])
+            ref = next(r for r in pending if r in done)
+            w = pending[ref][0]
+            due, again = receive(ref)
             if due:
                 drain()  # the in-flight batches belong to this segment
                 run.last_ck = self.step
