@@ -175,6 +175,18 @@ def _save(fig, out_dir, name):
     return path
 
 
+def course_episode(env_id: str, kwargs: dict, name: str, policy_file: str | None, seed: int):
+    """One (course, controller) episode in a fresh process (a Ray task of ``--backend ray``):
+    (metrics, history, a stand-in env with the scenario's obstacles, last info, seconds)."""
+    from types import SimpleNamespace
+
+    policy, passive = controllers(policy_file)[name]
+    t0 = time.perf_counter()
+    metrics, history, env, info = run_episode(env_id, kwargs, policy, passive, seed)
+    scen = SimpleNamespace(obstacles=np.asarray(env.scenario.obstacles).copy())
+    return metrics, history, SimpleNamespace(scenario=scen), info, time.perf_counter() - t0
+
+
 def run(args: argparse.Namespace) -> int:
     os.makedirs(args.out, exist_ok=True)
     ctrls = controllers(args.policy)
@@ -182,12 +194,27 @@ def run(args: argparse.Namespace) -> int:
     total = len(COURSES) * len(ctrls)
     k = 0
     t_start = time.perf_counter()
-    for label, env_id, kwargs in COURSES:
+    remote = None
+    if getattr(args, "backend", "local") == "ray":  # all episodes at once on the cluster
+        from .rl.ray_backend import fan_out
+
+        policy_file = os.path.abspath(args.policy) if args.policy else None  # read on the nodes
+        keys = [(c, name) for c in range(len(COURSES)) for name in ctrls]
+        jobs = [(COURSES[c][1], COURSES[c][2], name, policy_file, args.seed) for c, name in keys]
+        remote = dict(zip(keys, fan_out(course_episode, jobs, args.ray_address)))
+    elif getattr(args, "ray_address", None):
+        raise ValueError("--ray-address needs --backend ray")
+    for c, (label, env_id, kwargs) in enumerate(COURSES):
         results[label] = {}
         for name, (policy, passive) in ctrls.items():
             k += 1
             t0 = time.perf_counter()
-            metrics, history, env, info = run_episode(env_id, kwargs, policy, passive, args.seed)
+            if remote is not None:
+                metrics, history, env, info, secs = remote[(c, name)]
+                t0 -= secs
+            else:
+                metrics, history, env, info = run_episode(env_id, kwargs, policy, passive,
+                                                          args.seed)
             results[label][name] = {"metrics": metrics, "history": history, "env": env}
             print(f"[{k:2d}/{total}] {label:24s} {name:16s} progress {metrics['progress']:5.2f} m "
                   f"travel reduction {100 * metrics['travel_reduction']:5.1f} % "
@@ -234,4 +261,7 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--policy", default=None, help="exported TorchScript policy to evaluate too")
     p.add_argument("--no-video", action="store_true", help="skip the animation")
+    from .rl.commands import backend_args
+
+    backend_args(p)  # --backend ray: the episodes as tasks on a Ray cluster
     p.set_defaults(func=run)

@@ -56,6 +56,14 @@ def _train(args) -> int:
         extra["seed"] = args.seed
     if args.steps is not None:
         extra["total_steps"] = args.steps
+    ray_extra = {k: v for k, v in (("address", args.ray_address), ("num_workers", args.num_workers),
+                                   ("envs_per_worker", args.envs_per_worker),
+                                   ("mode", args.ray_mode)) if v is not None}
+    if ray_extra:
+        if args.backend != "ray":
+            raise ValueError("--ray-address, --num-workers, --envs-per-worker and --ray-mode "
+                             "need --backend ray")
+        extra["ray"] = ray_extra
     if args.resume:
         # The run's saved settings, changed only by what this command line gives explicitly.
         from .config import merge, parse_assignment
@@ -67,17 +75,34 @@ def _train(args) -> int:
             raise ValueError("--resume continues with the run's saved settings; use --set to "
                              "change one")
         cfg = load_checkpoint(args.run_dir, with_buffer=False)["state"]["config"]
+        if "ray" not in cfg:  # saved before the Ray backend existed
+            from .config import load_preset
+
+            cfg["ray"] = load_preset("quick")["ray"]
         if extra:
             cfg = merge(cfg, extra)
         for o in args.set:
             cfg = merge(cfg, parse_assignment(o))
     else:
         cfg = _build(args, extra)
+    if args.backend == "ray":  # the simulations are the workers' (env.num_envs follows)
+        from .config import merge
+
+        cfg = merge(cfg, {"env": {"num_envs": cfg["ray"]["num_workers"] *
+                                  cfg["ray"]["envs_per_worker"]}})
     env_id = resolve_env_id(cfg["env"])
     run_dir = args.run_dir or os.path.join(
         "runs", f"{re.sub(r'[^A-Za-z0-9_.-]+', '_', env_id)}-seed{cfg['seed']}")
-    tr = Trainer(cfg, run_dir, resume=args.resume)
-    print(f"training on {env_id} ({tr.n} simulations, obs {tr.obs_dim}, act {tr.act_dim}, layout "
+    if args.backend == "ray":
+        from .ray_trainer import RayTrainer
+
+        tr = RayTrainer(cfg, run_dir, resume=args.resume)
+        where = (f"{tr.rc['num_workers']} Ray workers x {tr.rc['envs_per_worker']}, "
+                 f"{tr.rc['mode']} mode, ")
+    else:
+        tr = Trainer(cfg, run_dir, resume=args.resume)
+        where = ""
+    print(f"training on {env_id} ({where}{tr.n} simulations, obs {tr.obs_dim}, act {tr.act_dim}, layout "
           f"{tr.layout.version}, FTS noise on {tr.buffer.noise_idx.size} components) -> {run_dir}")
     try:
         res = tr.train()
@@ -93,7 +118,13 @@ def _consolidate(args) -> int:
 
     cfg = _build(args)
     print(f"consolidating {len(args.runs)} runs -> {args.out}")
-    res = consolidate_runs(args.runs, cfg, args.out, evaluate_policies=not args.no_eval)
+    ray = None
+    if args.backend == "ray":
+        ray = {"address": args.ray_address or cfg["ray"]["address"],
+               "object_store_mb": cfg["ray"]["object_store_mb"]}
+    elif args.ray_address:
+        raise ValueError("--ray-address needs --backend ray")
+    res = consolidate_runs(args.runs, cfg, args.out, evaluate_policies=not args.no_eval, ray=ray)
     print(f"checkpoint: {res['checkpoint']}")
     if res["table"]:
         print(f"evaluation table: {os.path.join(args.out, 'evaluation.csv')}")
@@ -126,6 +157,14 @@ def _stamp(args) -> int:
     return 0
 
 
+def backend_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--backend", choices=("local", "ray"), default="local",
+                   help="where simulations run: this process (local) or a Ray cluster (needs "
+                   "the extra ernest-cpp[ray])")
+    p.add_argument("--ray-address", metavar="ADDRESS", help="cluster to join (host:port of `ray "
+                   "start --head`, or auto); default: start one on this machine")
+
+
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("train", help="train a TD3 specialist (seed 004 §4.1, §4.4)",
                               description="Train a TD3 specialist on a Gymnasium environment.")
@@ -139,6 +178,13 @@ def add_parser(subparsers) -> None:
     p.add_argument("--steps", type=_positive_int,
                    help="total transitions to collect (total_steps, at least 1)")
     p.add_argument("--seed", type=int)
+    backend_args(p)
+    p.add_argument("--num-workers", type=_positive_int, help="Ray rollout workers (ray.num_workers)")
+    p.add_argument("--envs-per-worker", type=_positive_int,
+                   help="simulations per Ray worker (ray.envs_per_worker)")
+    p.add_argument("--ray-mode", choices=("sync", "async"),
+                   help="sync: bit-identical to --backend local with the same number of "
+                   "simulations; async: throughput first (ray.mode)")
     p.set_defaults(func=_train)
 
     p = subparsers.add_parser("consolidate", help="pool specialists' experience and train one "
@@ -146,6 +192,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("runs", nargs="+", metavar="RUN", help="specialist run or checkpoint folders")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--no-eval", action="store_true", help="skip the evaluation table")
+    backend_args(p)
     _settings_args(p)
     p.set_defaults(func=_consolidate)
 

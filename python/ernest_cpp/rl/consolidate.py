@@ -55,7 +55,9 @@ def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, s
 
 
 def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies: bool = True,
-                     log=print) -> dict:
+                     log=print, ray: dict | None = None) -> dict:
+    """``ray`` ({address, object_store_mb}): evaluate on a Ray cluster (one task per policy and
+    environment) instead of in this process."""
     c = cfg["consolidate"]
     torch.set_num_threads(int(cfg["torch_threads"]))
     specialists = []
@@ -106,12 +108,34 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
     os.replace(os.path.join(ck_root, "LATEST.tmp"), os.path.join(ck_root, "LATEST"))
     result = {"checkpoint": os.path.join(ck_root, "consolidated"), "info": info, "table": []}
     if evaluate_policies:
-        result["table"] = evaluation_table(agent, specialists, cfg, out_dir, log)
+        result["table"] = evaluation_table(agent, specialists, cfg, out_dir, log, ray)
     return result
 
 
-def evaluation_table(agent: TD3, specialists: list[dict], cfg: dict, out_dir: str, log=print):
-    """Consolidated actor vs every specialist on every specialist's environment."""
+def evaluate_actor(weights: dict, obs_dim: int, act_dim: int, hidden: int, env_id: str,
+                   kwargs: dict, episodes: int, seed: int, info_keys) -> dict:
+    """``evaluate`` of an actor given by its weights, on a fresh env (a Ray task's body)."""
+    from .networks import Actor
+
+    torch.set_num_threads(1)
+    actor = Actor(obs_dim, act_dim, hidden).requires_grad_(False)
+    actor.load_state_dict({k: torch.as_tensor(np.array(v)) for k, v in weights.items()})
+
+    def policy(obs):
+        with torch.no_grad():
+            return actor(torch.as_tensor(obs)).numpy().astype(np.float64)
+
+    env = make_env(env_id, kwargs)
+    try:
+        return evaluate(policy, env, episodes, seed, info_keys)
+    finally:
+        env.close()
+
+
+def evaluation_table(agent: TD3, specialists: list[dict], cfg: dict, out_dir: str, log=print,
+                     ray: dict | None = None):
+    """Consolidated actor vs every specialist on every specialist's environment (with ``ray``,
+    each pair is a task on the cluster: ray_backend.fan_out)."""
     ev = cfg["eval"]
     envs = []
     for s in specialists:
@@ -122,12 +146,22 @@ def evaluation_table(agent: TD3, specialists: list[dict], cfg: dict, out_dir: st
     policies = [("consolidated", agent)] + [
         (os.path.basename(os.path.dirname(os.path.dirname(s["path"]))) or s["path"],
          agent_from_checkpoint(s)) for s in specialists]
-    rows = []
-    for env_id, kwargs in envs:
+    rows, episodes, keys = [], int(cfg["consolidate"]["eval_episodes"]), ev.get("info_keys") or ()
+    if ray is not None:
+        from .ray_backend import fan_out, weights_to_numpy
+
+        jobs = [(env_id, kwargs, name, pol) for env_id, kwargs in envs for name, pol in policies]
+        results = fan_out(evaluate_actor, [
+            (weights_to_numpy(pol.actor), pol.obs_dim, pol.act_dim, pol.config.hidden, env_id,
+             kwargs, episodes, int(ev["seed"]), list(keys)) for env_id, kwargs, _, pol in jobs],
+            ray.get("address"), ray.get("object_store_mb", 200))
+        for (env_id, _, name, _), res in zip(jobs, results):
+            rows.append({"policy": name, "env": env_id, **res})
+            log(f"  {name:>20s} on {env_id}: return {res['return']:.3f}")
+    for env_id, kwargs in envs if ray is None else ():
         env = make_env(env_id, kwargs)
         for name, pol in policies:
-            res = evaluate(pol.act, env, int(cfg["consolidate"]["eval_episodes"]), int(ev["seed"]),
-                           ev.get("info_keys") or ())
+            res = evaluate(pol.act, env, episodes, int(ev["seed"]), keys)
             rows.append({"policy": name, "env": env_id, **res})
             log(f"  {name:>20s} on {env_id}: return {res['return']:.3f}")
         env.close()

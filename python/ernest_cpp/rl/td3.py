@@ -62,8 +62,12 @@ def _as_tensor(x) -> torch.Tensor:
 class TD3:
     """Actor, twin critics, their targets and Adam optimisers; the update counter decides the delay."""
 
-    def __init__(self, obs_dim: int, act_dim: int, config: TD3Config | None = None, seed: int = 0):
+    def __init__(self, obs_dim: int, act_dim: int, config: TD3Config | None = None, seed: int = 0,
+                 device: str = "cpu"):
+        """``device``: where the networks learn (e.g. ``cuda``); initialisation and target noise
+        are drawn on the CPU either way, so the draws do not depend on it."""
         self.config = (config or TD3Config()).validate()
+        self.device = torch.device(device)
         self.obs_dim, self.act_dim = obs_dim, act_dim
         c = self.config
         # Initialisation and target noise are drawn from our own generator: reproducible, and
@@ -73,6 +77,8 @@ class TD3:
             torch.manual_seed(int(seed))
             self.actor = Actor(obs_dim, act_dim, c.hidden)
             self.critic = TwinCritic(obs_dim, act_dim, c.hidden)
+        self.actor.to(self.device)
+        self.critic.to(self.device)
         self.actor_target = copy.deepcopy(self.actor).requires_grad_(False)
         self.critic_target = copy.deepcopy(self.critic).requires_grad_(False)
         self.actor_opt = torch.optim.Adam(self.actor.parameters(), lr=c.actor_lr)
@@ -82,19 +88,20 @@ class TD3:
     @torch.no_grad()
     def act(self, obs: np.ndarray) -> np.ndarray:
         """Deterministic policy action(s) in [-1, 1] for one observation or a batch."""
-        o = _as_tensor(obs)
+        o = _as_tensor(obs).to(self.device)
         single = o.dim() == 1
         a = self.actor(o.unsqueeze(0) if single else o)
-        a = a.numpy().astype(np.float64)
+        a = a.cpu().numpy().astype(np.float64)
         return a[0] if single else a
 
     def update(self, batch: dict) -> dict:
         c = self.config
-        obs, act = _as_tensor(batch["obs"]), _as_tensor(batch["act"])
-        rew, next_obs = _as_tensor(batch["rew"]), _as_tensor(batch["next_obs"])
-        done = _as_tensor(batch["done"])
+        dev = self.device
+        obs, act = _as_tensor(batch["obs"]).to(dev), _as_tensor(batch["act"]).to(dev)
+        rew, next_obs = _as_tensor(batch["rew"]).to(dev), _as_tensor(batch["next_obs"]).to(dev)
+        done = _as_tensor(batch["done"]).to(dev)
         with torch.no_grad():
-            eps = torch.randn(act.shape, generator=self.gen) * c.target_noise
+            eps = (torch.randn(act.shape, generator=self.gen) * c.target_noise).to(dev)
             eps = eps.clamp(-c.target_noise_clip, c.target_noise_clip)
             next_act = (self.actor_target(next_obs) + eps).clamp(-1.0, 1.0)
             tq1, tq2 = self.critic_target(next_obs, next_act)

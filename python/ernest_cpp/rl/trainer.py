@@ -14,6 +14,7 @@ cut at a checkpoint are treated like time-outs (their transitions keep bootstrap
 from __future__ import annotations
 
 import collections
+import dataclasses
 import json
 import math
 import os
@@ -180,6 +181,30 @@ def to_env_action(a: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarra
     return low + (np.clip(a, -1.0, 1.0) + 1.0) * 0.5 * (high - low)
 
 
+def step_transitions(nxt: np.ndarray, term, trunc, info, autoreset: str,
+                     pending_reset: np.ndarray, lost=None):
+    """What one vector step gives the replay buffer: (valid, real_next, done, pending_reset).
+    ``valid`` marks envs whose step is a transition: not the reset step after a next-step
+    autoreset, nor an env ``lost`` this step (a restarted Ray worker's, reset instead of stepped).
+    ``real_next`` has the final observations of same-step autoresets in place of the reset ones."""
+    done = np.logical_or(term, trunc)
+    if autoreset == "same":
+        valid = np.ones(len(done), bool)
+        real_next = nxt.copy()
+        if done.any():
+            fo = info["final_obs"]
+            for i in np.flatnonzero(done):
+                real_next[i] = fo[i]
+    else:  # next-step: obs at `done` is the final one; the step after it only resets
+        valid = ~pending_reset
+        real_next = nxt
+        done = done & valid
+        pending_reset = done.copy()
+    if lost is not None and np.any(lost):
+        valid, done, pending_reset = valid & ~lost, done & ~lost, pending_reset & ~lost
+    return valid, real_next, done, pending_reset
+
+
 def info_value(info: dict, key: str):
     """A scalar from an info dict; dotted keys reach nested dicts (episode_metrics.progress)."""
     v = info
@@ -286,7 +311,8 @@ def _read_checkpoint(ck: str, with_buffer: bool) -> dict:
     except (OSError, json.JSONDecodeError) as exc:
         raise CorruptFileError(f"{ck}/state.json: unreadable ({exc})") from None
     try:
-        agent_sd = torch.load(os.path.join(ck, "agent.pt"), weights_only=True)
+        agent_sd = torch.load(os.path.join(ck, "agent.pt"), weights_only=True,
+                              map_location="cpu")  # a GPU learner's checkpoint loads anywhere
     except Exception as exc:  # torch raises several types for damaged zip archives
         raise CorruptFileError(f"{ck}/agent.pt: unreadable network file ({exc})") from None
     out = {"path": ck, "state": state, "agent": agent_sd}
@@ -320,15 +346,15 @@ class Trainer:
         ec = cfg["env"]
         self.eval_env = make_env(self.env_id, ec.get("kwargs"))
         self.layout = env_layout(self.eval_env)
-        self.vec = make_vector_env(self.env_id, int(ec["num_envs"]), ec["vector"], ec.get("kwargs"),
-                                   ec.get("threads"), ec.get("autoreset", "same"))
+        self.vec = self._make_vec()
         self.autoreset = autoreset_mode(self.vec)
         self.n = self.vec.num_envs
         self.obs_dim, self.act_dim, self.low, self.high = check_spaces(
             self.vec.single_observation_space, self.vec.single_action_space)
         self.td3_cfg = TD3Config(**cfg["td3"]).validate()
         seed = int(cfg["seed"])
-        self.agent = TD3(self.obs_dim, self.act_dim, self.td3_cfg, seed=seed)
+        self.agent = TD3(self.obs_dim, self.act_dim, self.td3_cfg, seed=seed,
+                         device=self._learner_device())
         self.buffer = ReplayBuffer(int(cfg["buffer_size"]), self.obs_dim, self.act_dim)
         self.buffer.set_noise(*noise_for(cfg["noise"], self.layout))
         ex = cfg["exploration"]
@@ -343,6 +369,7 @@ class Trainer:
         self.segment = 0  # checkpoint segments: the env reset seeds of each segment are fixed
         self.episodes = 0
         self.update_acc = 0.0
+        self.lost_transitions = 0  # env steps of Ray workers that died (never in a local run)
         self.recent = collections.deque(maxlen=int(cfg["log"]["recent_episodes"]))
         self.last_eval: dict = {}
         if resume:
@@ -353,6 +380,14 @@ class Trainer:
         os.makedirs(run_dir, exist_ok=True)
         with open(os.path.join(run_dir, "config.yaml"), "w") as fh:
             yaml.safe_dump(cfg, fh, sort_keys=False)
+
+    def _learner_device(self) -> str:
+        return "cpu"
+
+    def _make_vec(self):
+        ec = self.cfg["env"]
+        return make_vector_env(self.env_id, int(ec["num_envs"]), ec["vector"], ec.get("kwargs"),
+                               ec.get("threads"), ec.get("autoreset", "same"))
 
     # ------------------------------------------------------------------ state
     def _reset_seeds(self) -> list[int]:
@@ -373,6 +408,7 @@ class Trainer:
                 "td3": self.agent.config_dict(), "layout": self.layout.to_dict(),
                 "step": self.step, "segment": self.segment, "episodes": self.episodes,
                 "update_acc": self.update_acc, "updates": self.agent.updates,
+                "lost_transitions": self.lost_transitions,
                 "explore_rng": _rng_state(self.explore_rng),
                 "sample_rng": _rng_state(self.sample_rng),
                 "exploration": self.exploration.state_dict(), "recent": list(self.recent),
@@ -426,6 +462,7 @@ class Trainer:
         self.buffer = buf
         self.step, self.segment, self.episodes = st["step"], st["segment"], st["episodes"]
         self.update_acc = st["update_acc"]
+        self.lost_transitions = st.get("lost_transitions", 0)
         _set_rng_state(self.explore_rng, st["explore_rng"])
         _set_rng_state(self.sample_rng, st["sample_rng"])
         self.exploration.load_state_dict(st["exploration"])
@@ -502,25 +539,10 @@ class Trainer:
         return res
 
     def train(self, total_steps: int | None = None) -> dict:
-        cfg = self.cfg
-        total = int(total_steps if total_steps is not None else cfg["total_steps"])
-        if total < 1:  # nothing to train on would end in a NaN summary
-            raise ValueError(f"total_steps = {total}: must be at least 1")
-        writer = _writer(os.path.join(self.run_dir, "tb")) if cfg["log"]["tensorboard"] else None
-        bar = _bar(total, self.step, cfg["log"]["progress_bar"])
-        bs, ups = self.td3_cfg.batch_size, float(cfg["updates_per_step"])
-        random_steps, starts = int(cfg["random_steps"]), int(cfg["learning_starts"])
-        ev_every, ck_every = int(cfg["eval"]["every_steps"]), int(cfg["checkpoint"]["every_steps"])
-        log_every = int(cfg["log"]["every_steps"])
-        baseline = self.run_baseline()
-        if baseline and writer:
-            for key, v in baseline.items():
-                if key != "action":
-                    writer.add_scalar(f"eval/baseline_{key}", v, self.step)
+        run = self._begin(total_steps)
+        random_steps = int(self.cfg["random_steps"])
         obs = self._reset_envs()
-        stats = collections.defaultdict(list)
-        t0, s0, last_ck = time.perf_counter(), self.step, self.step
-        while self.step < total:
+        while self.step < run.total:
             if self.step < random_steps:
                 a = self.explore_rng.uniform(-1.0, 1.0, (self.n, self.act_dim))
             else:
@@ -529,19 +551,13 @@ class Trainer:
             nxt, r, term, trunc, info = self.vec.step(env_a)
             nxt = np.asarray(nxt, np.float32)
             r = np.asarray(r, np.float64)
-            done = np.logical_or(term, trunc)
-            if self.autoreset == "same":
-                valid = np.ones(self.n, bool)
-                real_next = nxt.copy()
-                if done.any():
-                    fo = info["final_obs"]
-                    for i in np.flatnonzero(done):
-                        real_next[i] = fo[i]
-            else:  # next-step: obs at `done` is the final one; the step after it only resets
-                valid = ~self.pending_reset
-                real_next = nxt
-                done = done & valid
-                self.pending_reset = done.copy()
+            lost = info.get("lost") if isinstance(info, dict) else None  # Ray: restarted worker
+            valid, real_next, done, self.pending_reset = step_transitions(
+                nxt, term, trunc, info, self.autoreset, self.pending_reset, lost)
+            if lost is not None:
+                self.lost_transitions += int(np.sum(lost))
+                self.log(f"{int(np.sum(lost))} env steps lost ({self.lost_transitions} in all)")
+                self.ep_ret[lost], self.ep_len[lost] = 0.0, 0  # the episode is gone, not counted
             if valid.all():
                 self.buffer.add(obs, a, r, real_next, term)
             elif valid.any():
@@ -550,58 +566,110 @@ class Trainer:
             self.ep_ret += np.where(valid, r, 0.0)
             self.ep_len += valid
             for i in np.flatnonzero(done):
-                self.recent.append(float(self.ep_ret[i]))
-                self.episodes += 1
-                if writer:
-                    writer.add_scalar("train/episode_return", self.ep_ret[i], self.step)
-                    writer.add_scalar("train/episode_length", self.ep_len[i], self.step)
+                self._episode_done(run, self.ep_ret[i], self.ep_len[i])
                 self.ep_ret[i], self.ep_len[i] = 0.0, 0
             if done.any() or not valid.all():  # episodes start in the POLICY state (§4.4)
                 self.exploration.reset(done | ~valid)
             obs = nxt
-            prev = self.step
-            added = int(valid.sum())
-            self.step += added
-            if self.step >= starts and len(self.buffer) >= 1:
-                self.update_acc += added * ups
-                k = int(self.update_acc)
-                self.update_acc -= k
-                for _ in range(k):
-                    m = self.agent.update(self.buffer.sample(bs, self.sample_rng))
-                    for key, v in m.items():
-                        stats[key].append(v)
-            bar.update(self.step - prev)
-            if writer and self.step // log_every > prev // log_every:
-                sps = (self.step - s0) / max(time.perf_counter() - t0, 1e-9)
-                writer.add_scalar("perf/steps_per_second", sps, self.step)
-                writer.add_scalar("perf/updates", self.agent.updates, self.step)
-                for key, v in stats.items():
-                    writer.add_scalar(f"train/{key}", float(np.mean(v)), self.step)
-                stats.clear()
-            if self.step // log_every > prev // log_every or self.step >= total:
-                sps = (self.step - s0) / max(time.perf_counter() - t0, 1e-9)
-                rec = f"{np.mean(self.recent):.2f}" if self.recent else "-"
-                bar.set_postfix_str(f"{sps:.0f} steps/s, return(last {len(self.recent)}) {rec}")
-            if ev_every > 0 and self.step // ev_every > prev // ev_every:
-                res = self.run_eval()
-                if writer:
-                    for key, v in res.items():
-                        if key != "step":
-                            writer.add_scalar(f"eval/{key}", v, self.step)
-                    for key, v in (baseline or {}).items():  # flat reference line on the plots
-                        if key != "action":
-                            writer.add_scalar(f"eval/baseline_{key}", v, self.step)
-            if ck_every > 0 and self.step // ck_every > prev // ck_every:
+            if self._advance(run, int(valid.sum())):
                 obs = self._checkpoint_and_cut()
-                last_ck = self.step
-        if last_ck != self.step:
+        return self._finish(run)
+
+    # The loop's bookkeeping, shared with the Ray trainers (ray_trainer.py).
+    def _begin(self, total_steps: int | None):
+        cfg = self.cfg
+        total = int(total_steps if total_steps is not None else cfg["total_steps"])
+        if total < 1:  # nothing to train on would end in a NaN summary
+            raise ValueError(f"total_steps = {total}: must be at least 1")
+        run = _Run(total=total, stats=collections.defaultdict(list), t0=time.perf_counter(),
+                   s0=self.step, u0=self.agent.updates, last_ck=self.step)
+        run.writer = _writer(os.path.join(self.run_dir, "tb")) if cfg["log"]["tensorboard"] \
+            else None
+        run.bar = _bar(total, self.step, cfg["log"]["progress_bar"])
+        run.baseline = self.run_baseline()
+        if run.baseline and run.writer:
+            for key, v in run.baseline.items():
+                if key != "action":
+                    run.writer.add_scalar(f"eval/baseline_{key}", v, self.step)
+        return run
+
+    def _episode_done(self, run, ret: float, length: int) -> None:
+        self.recent.append(float(ret))
+        self.episodes += 1
+        if run.writer:
+            run.writer.add_scalar("train/episode_return", ret, self.step)
+            run.writer.add_scalar("train/episode_length", length, self.step)
+
+    def _learn(self, run, added: int) -> None:
+        """The learner's share of ``added`` new transitions (updates_per_step each)."""
+        if self.step >= int(self.cfg["learning_starts"]) and len(self.buffer) >= 1:
+            self.update_acc += added * float(self.cfg["updates_per_step"])
+            k = int(self.update_acc)
+            self.update_acc -= k
+            for _ in range(k):
+                m = self.agent.update(self.buffer.sample(self.td3_cfg.batch_size, self.sample_rng))
+                for key, v in m.items():
+                    run.stats[key].append(v)
+
+    def _perf(self, run) -> dict:
+        """Throughput figures for the progress bar and TensorBoard (perf/<name>)."""
+        dt = max(time.perf_counter() - run.t0, 1e-9)
+        return {"steps_per_second": (self.step - run.s0) / dt,
+                "updates_per_second": (self.agent.updates - run.u0) / dt,
+                "lost_transitions": self.lost_transitions}
+
+    def _bar_extra(self, perf: dict) -> str:
+        return ""
+
+    def _advance(self, run, added: int) -> bool:
+        """Count ``added`` transitions, learn, log, evaluate; True when a checkpoint is due (the
+        caller then saves it and cuts the episodes)."""
+        cfg, prev = self.cfg, self.step
+        self.step += added
+        self._learn(run, added)
+        run.bar.update(self.step - prev)
+        log_every = int(cfg["log"]["every_steps"])
+        ev_every, ck_every = int(cfg["eval"]["every_steps"]), int(cfg["checkpoint"]["every_steps"])
+        log_now = self.step // log_every > prev // log_every
+        if log_now or self.step >= run.total:
+            perf = self._perf(run)
+            if run.writer and log_now:
+                for key, v in perf.items():
+                    run.writer.add_scalar(f"perf/{key}", v, self.step)
+                run.writer.add_scalar("perf/updates", self.agent.updates, self.step)
+                for key, v in run.stats.items():
+                    run.writer.add_scalar(f"train/{key}", float(np.mean(v)), self.step)
+                run.stats.clear()
+            rec = f"{np.mean(self.recent):.2f}" if self.recent else "-"
+            extra = (f", lost {self.lost_transitions}" if self.lost_transitions else "") + \
+                self._bar_extra(perf)
+            run.bar.set_postfix_str(f"{perf['steps_per_second']:.0f} steps/s, "
+                                    f"{perf['updates_per_second']:.0f} updates/s, return(last "
+                                    f"{len(self.recent)}) {rec}{extra}")
+        if ev_every > 0 and self.step // ev_every > prev // ev_every:
+            res = self.run_eval()
+            if run.writer:
+                for key, v in res.items():
+                    if key != "step":
+                        run.writer.add_scalar(f"eval/{key}", v, self.step)
+                for key, v in (run.baseline or {}).items():  # flat reference line on the plots
+                    if key != "action":
+                        run.writer.add_scalar(f"eval/baseline_{key}", v, self.step)
+        if ck_every > 0 and self.step // ck_every > prev // ck_every:
+            run.last_ck = self.step
+            return True
+        return False
+
+    def _finish(self, run) -> dict:
+        if run.last_ck != self.step:
             self._checkpoint_and_cut()
-        bar.close()
-        if writer:
-            writer.close()
+        run.bar.close()
+        if run.writer:
+            run.writer.close()
         return {"step": self.step, "updates": self.agent.updates, "episodes": self.episodes,
                 "recent_return": float(np.mean(self.recent)) if self.recent else math.nan,
-                "last_eval": self.last_eval, "baseline": baseline}
+                "lost_transitions": self.lost_transitions,
+                "last_eval": self.last_eval, "baseline": run.baseline}
 
     def _checkpoint_and_cut(self) -> np.ndarray:
         self.segment += 1  # saved with the new segment: a resume resets exactly like we do now
@@ -613,6 +681,20 @@ class Trainer:
             if env is not None:
                 env.close()
         self.vec = self.eval_env = None
+
+
+@dataclasses.dataclass
+class _Run:
+    """One train() call's totals, timers, statistics, writer and bar."""
+    total: int
+    stats: dict
+    t0: float
+    s0: int
+    u0: int
+    last_ck: int
+    writer: object = None
+    bar: object = None
+    baseline: dict | None = None
 
 
 def _writer(path: str):
