@@ -13,4 +13,5 @@ void bind_statics(pybind11::module_& m);
 void bind_statics_rover(pybind11::module_& m);  // part of bind_statics (bindings/statics_rover.cpp)
 void bind_walker(pybind11::module_& m);
 void bind_perception(pybind11::module_& m);
+void bind_perception_selfimage(pybind11::module_& m);  // part of bind_perception (bindings/perception_selfimage.cpp)
 }  // namespace ernest::bindings

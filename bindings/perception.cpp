@@ -265,6 +265,8 @@ void bind_perception(py::module_& m) {
       .def_property_readonly("raycaster", &StereoMapper::raycaster,
                              py::return_value_policy::reference_internal)
       .def_property_readonly("frames", &StereoMapper::frames, "frames fused so far");
+
+  bind_perception_selfimage(m);  // the walker's self-imaging (seed 003 §4.3, §5.2)
 }
 
 }  // namespace ernest::bindings
