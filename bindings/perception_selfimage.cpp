@@ -88,7 +88,7 @@ void bind_perception_selfimage(py::module_& m) {
       .def_property_readonly("body", [](const SelfImageScene& s) { return Eigen::Matrix4d(s.body.matrix()); },
                              "4 x 4 body pose")
       .def_readonly("q", &SelfImageScene::q, "standard configuration (joints x legs)");
-  m.def("self_image_scene", &self_image_scene, "model"_a, "seed"_a, "rocks"_a = 10,
+  m.def("self_image_scene", &self_image_scene, "model"_a, "seed"_a, "rocks"_a = 12,
         "The seeded self-imaging scene (tests, benchmark and demo).");
   m.def("raised_leg", &raised_leg, "model"_a, "leg"_a, "lift"_a, "reach"_a,
         "Joint angles of `leg` with the wheel lifted by `lift` and moved out by `reach` [m] (IK).");

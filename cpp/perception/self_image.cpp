@@ -47,6 +47,8 @@ struct SelfImageSegmenter::Impl {
   std::vector<std::int64_t> seg_area, obj_area, group_area;
   std::vector<double> seg_sum, obj_sum, group_sum;
   std::unordered_map<std::uint64_t, PairCount> pairs;
+  std::vector<int> open, pixel_parent, piece_size, piece_label;
+  std::vector<std::pair<int, int>> assign;
 };
 
 SelfImageSegmenter::SelfImageSegmenter(const SelfImageOptions& options)
@@ -110,45 +112,89 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
   int labels = 1;  // 1 = no return
   for (int c = 1; c < ncomp; ++c)
     if (m.stats.at<int>(c, cv::CC_STAT_AREA) >= o.min_marker_pixels) m.marker_of_component[c] = ++labels;
-  m.markers.create(h, w, CV_32S);
+  m.markers.create(h, w, CV_32S);  // continuous: indexed as v * w + u below
   for (int v = 0; v < h; ++v) {
     const int* cc = m.components.ptr<int>(v);
     const float* d = m.disp.ptr<float>(v);
     int* mk = m.markers.ptr<int>(v);
     for (int u = 0; u < w; ++u) mk[u] = d[u] == 0.0f ? 1 : m.marker_of_component[cc[u]];
   }
-  // 3. flood over D scaled to 8 bits (cv::watershed takes a colour image; grey in all channels)
+  // 3. flood over the unsmoothed D scaled to 8 bits (cv::watershed takes a colour image; grey in
+  // all channels): the blur would move the segment borders off the depth steps by a pixel, and a
+  // rim of leg pixels left with the ground is a false obstacle after fusion
   double dmax = 0.0;
-  cv::minMaxLoc(m.smooth, nullptr, &dmax);
-  m.smooth.convertTo(m.grey, CV_8U, dmax > 0.0 ? 255.0 / dmax : 0.0);
+  cv::minMaxLoc(m.disp, nullptr, &dmax);
+  m.disp.convertTo(m.grey, CV_8U, dmax > 0.0 ? 255.0 / dmax : 0.0);
   cv::cvtColor(m.grey, m.rgb, cv::COLOR_GRAY2BGR);
   cv::watershed(m.rgb, m.markers);
-  // watershed lines (-1) and anything unreached (0): join the neighbouring segment closest in D
-  for (int pass = 0; pass < 4; ++pass) {
-    bool left = false;
-    for (int v = 0; v < h; ++v) {
-      int* mk = m.markers.ptr<int>(v);
-      const float* d = m.disp.ptr<float>(v);
-      for (int u = 0; u < w; ++u) {
-        if (mk[u] >= 1) continue;
+  // Watershed lines (-1) and unreached pixels (0) join a neighbouring segment: first, in rounds,
+  // those with a neighbour continuous in D (the side of the depth step they lie on), then the rest
+  // to the neighbour closest in D. A round reads only the labels of the rounds before it, so the
+  // scan order cannot carry a label along a line of unassigned pixels.
+  m.open.clear();
+  for (int v = 0; v < h; ++v) {
+    const int* mk = m.markers.ptr<int>(v);
+    for (int u = 0; u < w; ++u)
+      if (mk[u] < 1) m.open.push_back(v * w + u);
+  }
+  int* mk = m.markers.ptr<int>(0);  // continuous (created above)
+  const float* dd = m.disp.ptr<float>(0);
+  for (const float limit : {static_cast<float>(o.connect_jump), std::numeric_limits<float>::infinity()}) {
+    for (int round = 0; round < 10000 && !m.open.empty(); ++round) {
+      m.assign.clear();
+      for (const int i : m.open) {
+        const int v = i / w, u = i % w;
         int best = 0;
-        float err = std::numeric_limits<float>::infinity();
-        const int du[4] = {-1, 1, 0, 0}, dv[4] = {0, 0, -1, 1};
-        for (int k = 0; k < 4; ++k) {
-          const int uu = u + du[k], vv = v + dv[k];
-          if (uu < 0 || uu >= w || vv < 0 || vv >= h) continue;
-          const int l = m.markers.at<int>(vv, uu);
-          const float e = std::abs(m.disp.at<float>(vv, uu) - d[u]);
-          if (l >= 1 && e < err) {
+        float err = limit;
+        const int nb[4] = {u > 0 ? i - 1 : -1, u + 1 < w ? i + 1 : -1, v > 0 ? i - w : -1,
+                           v + 1 < h ? i + w : -1};
+        for (const int j : nb) {
+          if (j < 0 || mk[j] < 1) continue;
+          const float e = std::abs(dd[j] - dd[i]);
+          if (e <= err) {
             err = e;
-            best = l;
+            best = mk[j];
           }
         }
-        if (best > 0) mk[u] = best;
-        else left = true;
+        if (best > 0) m.assign.emplace_back(i, best);
       }
+      if (m.assign.empty()) break;
+      for (const auto& [i, l] : m.assign) mk[i] = l;
+      m.open.erase(std::remove_if(m.open.begin(), m.open.end(), [&](int i) { return mk[i] >= 1; }),
+                   m.open.end());
     }
-    if (!left) break;
+  }
+  for (const int i : m.open) mk[i] = 1;  // no segment anywhere near (no marker at all)
+  // cv::watershed queues a pixel once, at the priority of the neighbour that reached it first, so
+  // a few pixels just behind a depth step can end up on the wrong side of it. Repair: pieces of a
+  // segment that are not continuous in D with the rest of it (components of the same-label,
+  // continuous-D pixel graph smaller than a marker) and are continuous with another segment join it.
+  const int n_px = h * w;
+  m.pixel_parent.resize(n_px);
+  std::iota(m.pixel_parent.begin(), m.pixel_parent.end(), 0);
+  const float jump = static_cast<float>(o.connect_jump);
+  for (int i = 0; i < n_px; ++i) {
+    const int u = i % w;
+    if (u + 1 < w && mk[i + 1] == mk[i] && std::abs(dd[i + 1] - dd[i]) <= jump) unite(m.pixel_parent, i, i + 1);
+    if (i + w < n_px && mk[i + w] == mk[i] && std::abs(dd[i + w] - dd[i]) <= jump) unite(m.pixel_parent, i, i + w);
+  }
+  m.piece_size.assign(n_px, 0);
+  for (int i = 0; i < n_px; ++i) ++m.piece_size[find(m.pixel_parent, i)];
+  m.piece_label.assign(n_px, 0);
+  for (int i = 0; i < n_px; ++i) {
+    const int root = find(m.pixel_parent, i);
+    if (m.piece_size[root] >= o.min_marker_pixels || m.piece_label[root] != 0 || mk[i] == 1) continue;
+    const int u = i % w, v = i / w;
+    const int nb[4] = {u > 0 ? i - 1 : -1, u + 1 < w ? i + 1 : -1, v > 0 ? i - w : -1, v + 1 < h ? i + w : -1};
+    for (const int j : nb)
+      if (j >= 0 && mk[j] != mk[i] && mk[j] > 1 && std::abs(dd[j] - dd[i]) <= jump) {
+        m.piece_label[root] = mk[j];
+        break;
+      }
+  }
+  for (int i = 0; i < n_px; ++i) {
+    const int l = m.piece_label[find(m.pixel_parent, i)];
+    if (l != 0) mk[i] = l;
   }
   // 4. segment statistics and the continuity of every shared border
   m.seg_area.assign(labels + 1, 0);

@@ -35,11 +35,13 @@ struct SelfImageOptions {
   double marker_gradient = 0.25;
   int min_marker_pixels = 20;     ///< smaller flat regions seed nothing (they are flooded)
   /// Two neighbouring pixels of different segments are continuous when their D differ by at most
-  /// this [px]; two segments belong to one object when at least `connect_fraction` of their
-  /// neighbouring pairs (and at least `min_connect_pairs` of them) are continuous.
+  /// this [px]; two segments belong to one object when at least `min_connect_pairs` of their
+  /// neighbouring pairs, and at least `connect_fraction` of them, are continuous. A rock meets the
+  /// ground along its base (continuous) while its top and sides jump to the ground behind it, so
+  /// the fraction must stay well below one half; a raised leg has (noise aside) no continuous pair.
   double connect_jump = 1.0;
-  double connect_fraction = 0.5;
-  int min_connect_pairs = 3;
+  double connect_fraction = 0.05;
+  int min_connect_pairs = 10;
   double min_area_fraction = 0.002;  ///< the leg's object covers at least this share of the image
   double max_area_fraction = 0.6;    ///< ... and at most this
   int dilate_pixels = 0;             ///< grow the removed mask by this many pixels (0 = exact)

@@ -10,6 +10,7 @@
 namespace ernest::perception {
 
 SelfImageScene self_image_scene(const walker::WalkerModel& model, std::uint64_t seed, int rocks) {
+  // leg k's hip lies at 2 pi k / legs about the body axis (WalkerParameters)
   require_in_range("self_image_scene", "rocks", rocks, 0, 100);
   SelfImageScene s;
   const double spacing = 0.05, half = 8.0;
@@ -22,11 +23,14 @@ SelfImageScene self_image_scene(const walker::WalkerModel& model, std::uint64_t 
     }
   s.terrain = dynamics::HeightMap(h, spacing, -half, -half);
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> angle(-3.14159265358979, 3.14159265358979), radius(2.9, 3.8),
+  // rocks spread over the legs' directions (rock k in front of leg k mod legs, within ±0.4 rad),
+  // so every hazcam sees some
+  std::uniform_real_distribution<double> angle(-0.4, 0.4), radius(2.9, 3.8),
       size(0.15, 0.35), yaw(0.0, 1.5);
   for (int k = 0; k < rocks; ++k) {
     dynamics::BoxObstacle b;
-    const double a = angle(rng), r = radius(rng);
+    const double a = 2.0 * 3.14159265358979 * (k % model.legs()) / model.legs() + angle(rng);
+    const double r = radius(rng);
     b.size = Eigen::Vector3d(size(rng), size(rng), size(rng));
     const double x = r * std::cos(a), y = r * std::sin(a);
     b.centre = Eigen::Vector3d(x, y, s.terrain.height(x, y) + 0.4 * b.size.z());  // partly buried

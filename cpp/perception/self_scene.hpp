@@ -22,9 +22,10 @@ struct SelfImageScene {
 };
 
 /// 16 m x 16 m of ground (±3 cm undulation) centred under the walker, `rocks` boxes (0.15–0.35 m)
-/// at 2.9–3.8 m from the body axis (beyond every wheel's reach in the scene's poses), the body
+/// at 2.9–3.8 m from the body axis, in front of the legs in turn (beyond every wheel's reach in the
+/// scene's poses), the body
 /// at its standard pose.
-SelfImageScene self_image_scene(const walker::WalkerModel& model, std::uint64_t seed, int rocks = 10);
+SelfImageScene self_image_scene(const walker::WalkerModel& model, std::uint64_t seed, int rocks = 12);
 
 /// Joint angles of `leg` with its wheel lifted by `lift` [m] and moved radially out by `reach`
 /// [m] from the standard stance, foot orientation kept (LegIk from the standard angles). Throws

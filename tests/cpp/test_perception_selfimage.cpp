@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
@@ -105,6 +106,8 @@ TEST(SelfImageSegmentation, RemovedSegmentMatchesTheRenderedLeg) {
     const SelfImageResult r = seg.segment(f.depth, fx.camera);
     ASSERT_TRUE(r.found()) << "leg " << p.leg;
     const double iou = mask_iou(r.removed, f.mask_of(p.leg + 1));
+    std::printf("leg %d lift %.2f reach %.2f: IoU %.4f, %d segments, %d objects\n", p.leg, p.lift,
+                p.reach, iou, r.segment_count, r.object_count);
     EXPECT_GE(iou, 0.9) << "leg " << p.leg << " lift " << p.lift << " reach " << p.reach;
     EXPECT_GT(r.segment_count, 1);
     EXPECT_NE(r.leg_object, r.ground_object);
@@ -150,22 +153,32 @@ TEST(SelfImageSegmentation, NoFalseObstacleLeftWhereTheLegWas) {
       if (std::isnan(hr(i, j))) continue;
       ++known_after;
       worst_after = std::max(worst_after, std::abs(hr(i, j) - truth));
-      false_after += std::abs(hr(i, j) - truth) > kTolerance;
+      if (std::abs(hr(i, j) - truth) > kTolerance) {
+        ++false_after;
+        std::printf("false obstacle at (%.2f, %.2f): %.3f m\n", x, y, hr(i, j) - truth);
+      }
     }
   EXPECT_GT(leg_cells, 200);        // the leg is in the map without removal ...
   EXPECT_GT(worst_before, 0.3);     // ... as an obstacle tens of cm high
   EXPECT_EQ(false_after, 0) << "worst " << worst_after << " over " << known_after << " cells";
   EXPECT_GT(known_after, 0);        // some of those cells now hold the ground seen under the leg
+  std::printf("%d cells under the leg: worst %.3f m above the surface without removal; %d known "
+              "with it, worst |error| %.3f m\n", leg_cells, worst_before, known_after, worst_after);
 }
 
-TEST(SelfImageSegmentation, NoLegNoRemoval) {
-  // the standing walker from the same camera: nothing unconnected to the ground of the right size
+TEST(SelfImageSegmentation, RocksAreConnectedToTheGroundAndStay) {
+  // the rocks alone from every pose's camera: each meets the ground along its base, so nothing is
+  // removed (the criterion that keeps a rock next to a wheel in the map, §4.3's complaint about
+  // flattening)
   const Fixture& fx = fixture();
-  SelfImageFrame f;
-  render_with_robot(fx.caster, walker_solids(fx.model, fx.scene.body, fx.scene.q),
-                    hazcam_pose(fx.model, fx.scene.body, 0, fx.camera), fx.camera, {}, 9, f);
-  const SelfImageResult r = SelfImageSegmenter().segment(f.depth, fx.camera);
-  EXPECT_LT(r.removed_pixels, 0.002 * f.depth.size());
+  SelfImageSegmenter seg;
+  for (const int leg : {0, 2, 4}) {
+    SelfImageFrame f;
+    render_with_robot(fx.caster, {}, hazcam_pose(fx.model, fx.scene.body, leg, fx.camera), fx.camera,
+                      {}, 9, f);
+    const SelfImageResult r = seg.segment(f.depth, fx.camera);
+    EXPECT_FALSE(r.found()) << "leg " << leg << ": removed " << r.removed_pixels << " pixels";
+  }
 }
 
 TEST(SelfImageInput, BadInputIsAClearError) {
@@ -199,5 +212,5 @@ TEST(SelfImageInput, BadInputIsAClearError) {
   SelfImageFrame f;
   EXPECT_THROW(render_with_robot(fx.caster, {bad}, Eigen::Isometry3d::Identity(), fx.camera, {}, 0, f),
                std::invalid_argument);
-  EXPECT_THROW(raised_leg(fx.model, 0, 1.9, 0.9), std::invalid_argument);  // out of reach
+  EXPECT_THROW(raised_leg(fx.model, 0, std::nan(""), 0.0), std::invalid_argument);
 }
