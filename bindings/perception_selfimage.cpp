@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "pose.hpp"
 #include "ernest/perception/self_image.hpp"
 #include "ernest/perception/self_scene.hpp"
 
@@ -16,16 +17,6 @@ namespace ernest::bindings {
 
 using namespace ernest::perception;
 
-namespace {
-Eigen::Isometry3d isometry(const Eigen::Matrix4d& m, const char* what) {
-  if (!m.allFinite()) throw std::invalid_argument(std::string(what) + ": the 4 x 4 matrix is not finite");
-  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9)
-    throw std::invalid_argument(std::string(what) + ": the last row of the 4 x 4 matrix must be [0, 0, 0, 1]");
-  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
-  p.matrix() = m;
-  return p;
-}
-}  // namespace
 
 void bind_perception_selfimage(py::module_& m) {
   py::enum_<RobotSolid::Kind>(m, "RobotSolidKind", "Shape of a robot solid.")
@@ -44,7 +35,7 @@ void bind_perception_selfimage(py::module_& m) {
   m.def(
       "walker_solids",
       [](const walker::WalkerModel& model, const Eigen::Matrix4d& body, const Eigen::MatrixXd& q) {
-        return walker_solids(model, isometry(body, "body"), q);
+        return walker_solids(model, to_isometry(body, "body"), q);
       },
       "model"_a, "body"_a, "q"_a,
       "Every link capsule and wheel cylinder of the walker (label = leg + 1) for a body pose (4 x 4) "
@@ -55,7 +46,7 @@ void bind_perception_selfimage(py::module_& m) {
       "hazcam_pose",
       [](const walker::WalkerModel& model, const Eigen::Matrix4d& body, int leg,
          const StereoCameraParameters& camera) {
-        return Eigen::Matrix4d(hazcam_pose(model, isometry(body, "body"), leg, camera).matrix());
+        return Eigen::Matrix4d(hazcam_pose(model, to_isometry(body, "body"), leg, camera).matrix());
       },
       "model"_a, "body"_a, "leg"_a, "camera"_a, "4 x 4 pose of the left hazcam facing `leg`.");
 
@@ -70,7 +61,7 @@ void bind_perception_selfimage(py::module_& m) {
       "render_with_robot",
       [](const Raycaster& scene, const std::vector<RobotSolid>& solids, const Eigen::Matrix4d& pose,
          const StereoCameraParameters& camera, const SelfRenderOptions& options, std::uint64_t frame) {
-        const Eigen::Isometry3d p = isometry(pose, "pose");
+        const Eigen::Isometry3d p = to_isometry(pose, "pose");
         SelfImageFrame f;
         {
           py::gil_scoped_release release;

@@ -8,7 +8,10 @@
 //     where the gradient has its ridge), and markers = connected regions of small edge value
 //     (the paper's local minima each starting a segment);
 //  3. OpenCV's cv::watershed floods from the markers over D ("each segment adds progressively
-//     higher-valued neighbours until another segment is encountered");
+//     higher-valued neighbours until another segment is encountered"); its watershed lines join
+//     the neighbouring segment continuous in D, and the few pixels it leaves on the wrong side of a
+//     depth step (pieces not continuous with the rest of their segment) join the segment they are
+//     continuous with;
 //  4. adjacent segments whose shared border is continuous in D merge into objects; the largest
 //     object is the ground; among the objects not connected to it, the closest (largest mean D)
 //     of the right size is the leg, together with the other unconnected objects touching it (a
