@@ -1,11 +1,11 @@
 // Declarations of the per-subsystem binding functions called from module.cpp.
 #pragma once
 
+#include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <pybind11/pybind11.h>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
+#include "pose.hpp"  // to_isometry, shared by the binding files
 
 namespace ernest::bindings {
 void bind_soil(pybind11::module_& m);
@@ -18,9 +18,7 @@ void bind_statics_rover(pybind11::module_& m);  // part of bind_statics (binding
 void bind_walker(pybind11::module_& m);
 void bind_walker_gait(pybind11::module_& m);  // part of bind_walker (bindings/walker_gait.cpp)
 void bind_walker_sim(pybind11::module_& m);
-/// A 4 × 4 homogeneous transform from Python, checked (finite, rigid, last row 0 0 0 1);
-/// std::invalid_argument naming `field` otherwise (bindings/walker.cpp).
-Eigen::Isometry3d to_isometry(const Eigen::Matrix4d& t, const char* field);
 void bind_perception(pybind11::module_& m);
+void bind_perception_selfimage(pybind11::module_& m);  // part of bind_perception (bindings/perception_selfimage.cpp)
 void bind_footfall(pybind11::module_& m);
 }  // namespace ernest::bindings

@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "pose.hpp"
 #include "ernest/perception/stereo_mapper.hpp"
 
 namespace py = pybind11;
@@ -16,14 +17,6 @@ namespace ernest::bindings {
 using namespace ernest::perception;
 
 namespace {
-Eigen::Isometry3d to_pose(const Eigen::Matrix4d& m) {
-  if (!m.allFinite()) throw std::invalid_argument("pose: the 4 x 4 matrix is not finite");
-  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9)
-    throw std::invalid_argument("pose: the last row of the 4 x 4 matrix must be [0, 0, 0, 1]");
-  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
-  p.matrix() = m;
-  return p;
-}
 py::object optional_height(bool ok, double z) { return ok ? py::object(py::float_(z)) : py::none(); }
 }  // namespace
 
@@ -80,7 +73,7 @@ void bind_perception(py::module_& m) {
           "render",
           [](const Raycaster& r, const Eigen::Matrix4d& pose, const StereoCameraParameters& camera,
              std::uint64_t frame) {
-            const Eigen::Isometry3d p = to_pose(pose);
+            const Eigen::Isometry3d p = to_isometry(pose, "pose");
             GrayImage image;
             FloatImage depth;
             {
@@ -183,7 +176,7 @@ void bind_perception(py::module_& m) {
           "fuse_cloud",
           [](ElevationMap& map, const Eigen::Ref<const Points>& points, const Eigen::Matrix4d& pose,
              const StereoCameraParameters& camera) {
-            const Eigen::Isometry3d p = to_pose(pose);
+            const Eigen::Isometry3d p = to_isometry(pose, "camera_pose");
             py::gil_scoped_release release;
             return map.fuse_cloud(points, p, camera);
           },
@@ -265,6 +258,8 @@ void bind_perception(py::module_& m) {
       .def_property_readonly("raycaster", &StereoMapper::raycaster,
                              py::return_value_policy::reference_internal)
       .def_property_readonly("frames", &StereoMapper::frames, "frames fused so far");
+
+  bind_perception_selfimage(m);  // the walker's self-imaging (seed 003 §4.3, §5.2)
 }
 
 }  // namespace ernest::bindings

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "pose.hpp"
 #include "ernest/walker/leg_ik.hpp"
 #include "ernest/walker/self_collision.hpp"
 #include "ernest/walker/stance_loads.hpp"
@@ -22,21 +23,6 @@ using namespace pybind11::literals;
 namespace ernest::bindings {
 
 using namespace ernest::walker;
-
-// A 4 × 4 homogeneous transform from Python, checked (finite, rigid, last row 0 0 0 1); shared
-// with bindings/footfall.cpp through bindings.hpp.
-Eigen::Isometry3d to_isometry(const Eigen::Matrix4d& t, const char* field) {
-  if (!t.allFinite()) throw std::invalid_argument(std::string(field) + " is not finite");
-  if ((t.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9)
-    throw std::invalid_argument(std::string(field) + " must have last row (0, 0, 0, 1)");
-  const Eigen::Matrix3d r = t.topLeftCorner<3, 3>();
-  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > 1e-6 || r.determinant() <= 0.0)
-    throw std::invalid_argument(std::string(field) + " rotation block is not a rotation matrix");
-  Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
-  iso.linear() = r;
-  iso.translation() = t.topRightCorner<3, 1>();
-  return iso;
-}
 
 namespace {
 
