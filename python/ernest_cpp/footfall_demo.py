@@ -131,8 +131,16 @@ def run(out: Path, steps: int = 6, stride: float = 0.4, seed: int = 3, cell: flo
     log(f"[footfall] gait: steps {min(gait['step_lengths']):.3f}..{max(gait['step_lengths']):.3f} m, "
         f"rigid plan executed clearance {100 * gait['rigid_executed_clearance']:.1f} cm, compensated "
         f"{100 * gait['compensated_executed_clearance']:.1f} cm ({time.perf_counter() - t0:.1f} s)")
+    log("[footfall] self-imaging: the raised leg in the hazard camera's depth map, removed by watershed (§4.3, §5.2) ...")
+    from . import perception_selfimage
+
+    t0 = time.perf_counter()
+    selfimage = perception_selfimage.demo(str(out), seed=seed)
+    log(f"[footfall] self-imaging: IoU >= {selfimage['min_iou']:.3f} on {len(selfimage['poses'])} poses, false obstacle "
+        f"{100 * selfimage['false_obstacle_before_m']:.0f} cm -> {100 * selfimage['false_obstacle_after_m']:.1f} cm "
+        f"({time.perf_counter() - t0:.1f} s)")
     result = {"steps": rows, "stride_m": stride, "lift_m": mo.lift_height, "min_margin_m": mo.min_margin, "seed": seed, "cell_m": cell, "rocks": rocks,
-              "gait": gait, "seconds": time.perf_counter() - t_all}
+              "gait": gait, "selfimage": selfimage, "seconds": time.perf_counter() - t_all}
     (out / "footfall.json").write_text(json.dumps(result, indent=2))
     _report(out, result)
     return result
@@ -175,6 +183,13 @@ def _report(out: Path, r: dict) -> None:
               f"{100 * g['compensated_executed_clearance']:.2f} |", "",
               f"Simulator sag vs the sag model: {1e3 * g['sag_error_six']:.2f} mm (six feet down), "
               f"{1e3 * g['sag_error_lifted']:.2f} mm (leg lifted). ![gait](footfall_gait.png)", ""]
+    si = r["selfimage"]
+    lines += ["## Self-imaging (§4.3, §5.2)", "",
+              f"A raised leg seen by the hazard camera, removed by watershed segmentation of the depth map before "
+              f"fusion: intersection over union with the rendered leg {si['min_iou']:.3f} or better on "
+              f"{len(si['poses'])} poses; the map under the leg stands up to {100 * si['false_obstacle_before_m']:.0f} cm "
+              f"above the ground without the removal, {100 * si['false_obstacle_after_m']:.1f} cm with it. "
+              "![self-imaging](selfimage.png)", ""]
     for s in r["steps"]:
         name = f"step{s['step']}_leg{s['leg']}"
         lines.append(f"![{name} map]({name}_map.png)")
