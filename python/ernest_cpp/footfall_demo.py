@@ -128,7 +128,8 @@ def run(out: Path, steps: int = 6, stride: float = 0.4, seed: int = 3, cell: flo
 
     t0 = time.perf_counter()
     gait = footfall_gait.demo(out)
-    log(f"[footfall] gait: steps {min(gait['step_lengths']):.3f}..{max(gait['step_lengths']):.3f} m, "
+    steps_m = np.asarray(gait["step_lengths"])
+    log(f"[footfall] gait: steps {steps_m.min():.3f}..{steps_m.max():.3f} m, "
         f"rigid plan executed clearance {100 * gait['rigid_executed_clearance']:.1f} cm, compensated "
         f"{100 * gait['compensated_executed_clearance']:.1f} cm ({time.perf_counter() - t0:.1f} s)")
     log("[footfall] self-imaging: the raised leg in the hazard camera's depth map, removed by watershed (§4.3, §5.2) ...")
@@ -170,9 +171,9 @@ def _report(out: Path, r: dict) -> None:
               "the smoothed one through the compliance waypoints above start and goal.", ""]
     g = r["gait"]
     lines += ["## Skeleton gait and execution in simulation (§5.3.1, §4.1)", "",
-              f"Reverse-wave order {g['sequence']} on flat ground: step lengths "
-              f"{min(g['step_lengths']):.3f}–{max(g['step_lengths']):.3f} m, body shifts "
-              f"{min(g['shift_lengths']):.3f}–{max(g['shift_lengths']):.3f} m, smallest support margin "
+              f"Reverse-wave order {g['sequence']} on flat ground, {len(g['step_lengths'])} cycles: step lengths "
+              f"{np.min(g['step_lengths']):.3f}–{np.max(g['step_lengths']):.3f} m, body shifts "
+              f"{np.min(g['shift_lengths']):.3f}–{np.max(g['shift_lengths']):.3f} m, smallest support margin "
               f"{g['min_support_margin']:.3f} m, planned in {g['gait_plan_seconds']:.2f} s"
               + (f"; periodic after the second cycle to {1e3 * g['periodicity_error']:.2f} mm." if g['periodicity_error'] == g['periodicity_error'] else "."), "",
               "The same swing over a rock, executed in the ODE walker (compliant wheels, eq 3):", "",
