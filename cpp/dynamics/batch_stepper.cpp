@@ -3,6 +3,7 @@
 #include <string>
 
 #include "ernest/common/exclusive_use.hpp"
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::dynamics {
@@ -39,6 +40,7 @@ std::shared_ptr<RoverSim> BatchStepper::sim_ptr(int i) const {
 }
 
 void BatchStepper::run_share(int worker) {
+  const InterruptScope::Join join(scope_);  // stop with the caller on Ctrl-C
   for (size_t i = static_cast<size_t>(worker); i < sims_.size(); i += static_cast<size_t>(threads_)) {
     try {
       RoverSim& s = *sims_[i];
@@ -75,6 +77,7 @@ void BatchStepper::step(const double* commands, int n_steps, double* observation
   commands_ = commands;
   observations_ = observations;
   n_steps_ = n_steps;
+  scope_ = InterruptScope::current();
   {
     std::lock_guard<std::mutex> lk(mu_);
     pending_ = threads_ - 1;

@@ -12,6 +12,10 @@
 
 #include "ernest/dynamics/rover_sim.hpp"
 
+namespace ernest {
+class InterruptScope;
+}
+
 namespace ernest::dynamics {
 
 class BatchStepper {
@@ -32,7 +36,9 @@ class BatchStepper {
   /// keep the current commands; n_steps physics steps for every rover; observations (may be
   /// nullptr): size() x RoverSim::kObservationSize. If rovers fail, all the others still step;
   /// then the first failure (by rover index) is rethrown, SimulationDiverged naming the rover.
-  /// One thread at a time: a second concurrent call throws ConcurrentUse.
+  /// One thread at a time: a second concurrent call throws ConcurrentUse. Interrupted (Ctrl-C
+  /// from Python, common/interrupt.hpp): every rover stops after a whole step, possibly after
+  /// different numbers of steps (each RoverSim's time says); all stay usable.
   void step(const double* commands, int n_steps, double* observations);
 
  private:
@@ -51,6 +57,7 @@ class BatchStepper {
   const double* commands_ = nullptr;
   double* observations_ = nullptr;
   int n_steps_ = 0;
+  InterruptScope* scope_ = nullptr;  // the caller's (common/interrupt.hpp), joined by the workers
   std::atomic<bool> in_use_{false};  // step() from one thread at a time (exclusive_use.hpp)
 };
 

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/opt/ode.hpp"
 
@@ -766,6 +767,8 @@ TransitionResult plan_transition(const TransitionProblem& problem, Strategy stra
     return r;
   } catch (const std::invalid_argument&) {
     throw;  // a bad problem or option is the caller's error, never a silent fallback
+  } catch (const Interrupted&) {
+    throw;  // Ctrl-C (common/interrupt.hpp) stops the caller, it is not a failed optimisation
   } catch (const std::exception& e) {
     if (!options.fallback) throw;
     reason = e.what();
