@@ -19,7 +19,7 @@ from ernest_cpp.envs import ErnestEnv
 from ernest_cpp.rl import layout as L
 from ernest_cpp.rl.export import export_actor, load_policy
 from ernest_cpp.rl.networks import Actor
-from test_runtime import run_runtime
+from test_runtime import one_thread, run_runtime  # noqa: F401  (one_thread: a fixture)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 DEFAULT_POLICY = os.path.join(ROOT, "policies", "ernest_default.pt")
@@ -38,14 +38,6 @@ def fixed_observations() -> np.ndarray:
     obs = rng.uniform(-0.1, 0.1, (3, 45)).astype(np.float32)
     obs[0] = 0.0
     return obs
-
-
-@pytest.fixture
-def one_thread():
-    old = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(old)
 
 
 def test_python_layout_is_the_cpp_table():
