@@ -93,6 +93,7 @@ void constraint_trampoline(unsigned m, double* result, unsigned /*n*/, const dou
     return;
   }
   try {
+    poll_interrupt();  // as in the objective: captured, stopped, rethrown
     ctx->constraint->function(x, result, grad);
   } catch (...) {
     ctx->solve->error = std::current_exception();

@@ -637,6 +637,7 @@ TransitionResult optimise(const TransitionProblem& problem, Strategy strategy,
     const double T = nt == 1 ? t_lo : t_lo * std::pow(t_hi / t_lo, a / (nt - 1.0));
     for (int b = 0; b < np; ++b) {
       const double sigma = P2 * b / np;
+      poll_interrupt();  // Ctrl-C between candidates (common/interrupt.hpp)
       const auto t_eval = std::chrono::steady_clock::now();
       std::vector<double> x = cost.bezier_guess(T, sigma);
       const double viol = cost.max_violation(x, lo, hi);

@@ -77,7 +77,7 @@ CHILD = textwrap.dedent(r"""
         o.solver.max_time = 600.0
         o.solver.max_eval = 10**9
         o.solver.xtol_rel = o.solver.ftol_rel = o.solver.ftol_abs = 0.0
-        o.waypoints = 2000
+        # default waypoints; with no tolerance SLSQP runs for minutes (until max_time)
         out["delay"] = interrupt_after(0.5, lambda: O.plan_transition(
             p, O.Strategy.Spline, O.CostWeights(), o))
         out["after"] = bool(np.isfinite(O.plan(p, "bezier").duration))

@@ -202,7 +202,7 @@ def test_batch_arrays_wrong_shape_dtype_and_layout():
     np.testing.assert_array_equal(m.evaluate_batch(np.asfortranarray(states)), want)
     f32 = states.astype(np.float32)
     np.testing.assert_array_equal(m.evaluate_batch(f32), m.evaluate_batch(f32.astype(np.float64)))
-    for bad in (states[:, :4], states[None], "states", np.zeros((2, 5), dtype=object)):
+    for bad in (states[:, :4], states[None], "states", np.full((2, 5), "x", dtype=object)):
         with pytest.raises((TypeError, ValueError)):
             m.evaluate_batch(bad)
 
