@@ -495,7 +495,7 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
     assert cli.main(["train", "--env", POINT_MASS, "--run-dir", run, "--steps", "300",
                      "--set", "checkpoint.every_steps=300"] + common) == 0
     out = capsys.readouterr().out
-    assert "layout ernest-obs-v1" in out and "FTS noise on 24 components" in out
+    assert "layout ernest-obs-v2" in out and "FTS noise on 24 components" in out
     assert os.path.isdir(os.path.join(run, "tb"))  # TensorBoard logs
     assert cli.main(["train", "--run-dir", run, "--resume", "--steps", "400"]) == 0
     assert load_checkpoint(run, with_buffer=False)["state"]["step"] == 400
