@@ -27,7 +27,9 @@ from ernest_cpp import sensing as SE
 from ernest_cpp import soil as S
 from ernest_cpp import statics as ST
 
-FAST = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+# derandomize: the same examples every run, so CI is reproducible (explore with more examples locally)
+FAST = settings(max_examples=40, deadline=None, derandomize=True,
+                suppress_health_check=[HealthCheck.too_slow])
 SUBMODULES = ("soil", "dynamics", "envs", "opt", "sensing", "statics", "walker", "perception")
 
 
