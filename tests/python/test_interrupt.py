@@ -58,17 +58,17 @@ CHILD = textwrap.dedent(r"""
         from ernest_cpp._core import envs as CE
         from ernest_cpp.envs import make_options
         o = make_options("flat")
-        o.policy_dt = 5.0  # 400 physics steps per environment step
-        v = CE.VecRoverEnv(D.RoverParameters(), o, 64, 1)
-        v.reset(list(range(64)))
-        acts = np.zeros((64, 3))
-        out["delay"] = interrupt_after(0.5, lambda: v.step(acts))
+        o.policy_dt = 5.0  # 400 physics steps per environment step: ~3 s for the batch
+        v = CE.VecRoverEnv(D.RoverParameters(), o, 256, 1)
+        v.reset(list(range(256)))
+        acts = np.zeros((256, 3))
+        out["delay"] = interrupt_after(0.2, lambda: v.step(acts))
         try:
             v.step(acts)
             out["refused"] = None
         except RuntimeError as e:
             out["refused"] = str(e)
-        v.reset(list(range(64)))
+        v.reset(list(range(256)))
         out["after"] = bool(np.all(np.isfinite(v.step(acts)[0])))
     elif case == "transition":
         from ernest_cpp import opt as O
