@@ -11,6 +11,7 @@
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/dynamics/terrain.hpp"
 #include "ernest/dynamics/wheel_sync.hpp"
+#include "interrupt.hpp"
 
 namespace py = pybind11;
 using namespace pybind11::literals;
@@ -319,8 +320,10 @@ void bind_dynamics(py::module_& m) {
       .def_property_readonly("commands", &RoverSim::commands)
       .def("step", &RoverSim::step, py::call_guard<py::gil_scoped_release>(),
            "One physics step; raises SimulationDiverged on a non-finite or absurd state.")
-      .def("step_n", &RoverSim::step_n, "n"_a, py::call_guard<py::gil_scoped_release>(),
-           "n physics steps without returning to Python.")
+      .def("step_n", &RoverSim::step_n, "n"_a,
+           py::call_guard<py::gil_scoped_release, interruptible>(),
+           "n physics steps without returning to Python. Ctrl-C stops it between two steps "
+           "(KeyboardInterrupt); the simulator stays usable.")
       .def_property_readonly("state", &RoverSim::state_copy,
                              "RoverState after the last step (a copy).")
       .def(
@@ -371,6 +374,7 @@ void bind_dynamics(py::module_& m) {
             double* optr = obs.mutable_data();
             {
               py::gil_scoped_release release;
+              interruptible scope;  // Ctrl-C: every rover stops after a whole step
               b.step(cptr, n_steps, optr);
             }
             return obs;

@@ -7,6 +7,7 @@
 #include "ernest/envs/rover_env.hpp"
 #include "ernest/envs/scenarios.hpp"
 #include "ernest/envs/vec_env.hpp"
+#include "interrupt.hpp"
 
 namespace py = pybind11;
 using namespace pybind11::literals;
@@ -217,7 +218,8 @@ void bind_envs(py::module_& m) {
                           "N RoverEnv episodes stepped in parallel (next-step autoreset).")
       .def(py::init<const dynamics::RoverParameters&, const EnvOptions&, int, int>(), "params"_a,
            "options"_a, "num_envs"_a, "num_threads"_a)
-      .def("reset", &VecRoverEnv::reset, "seeds"_a, py::call_guard<py::gil_scoped_release>(),
+      .def("reset", &VecRoverEnv::reset, "seeds"_a,
+           py::call_guard<py::gil_scoped_release, interruptible>(),
            "Reset env i from seeds[i]; returns num_envs x 45 observations.")
       .def("step",
            [](VecRoverEnv& v, const Eigen::Ref<const ActionBatch>& actions) {
@@ -226,6 +228,7 @@ void bind_envs(py::module_& m) {
              std::vector<char> was_reset;
              {
                py::gil_scoped_release release;
+               interruptible scope;  // Ctrl-C: step refuses until reset (vec_env.hpp)
                v.step(actions, obs, res, was_reset);
              }
              const int n = v.size();

@@ -2,9 +2,11 @@
 #include <pybind11/pybind11.h>
 
 #include "bindings.hpp"
+#include "interrupt.hpp"
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "C++ core of ernest-cpp (soil, dynamics, optimisation, statics). Use the ernest_cpp package.";
+  ernest::bindings::register_interrupt_translator();  // Ctrl-C in long calls (interrupt.hpp)
   auto soil = m.def_submodule("soil", "Bekker–Wong soft soil and rigid contact (seed 004 §3.3–3.4)");
   ernest::bindings::bind_soil(soil);
   auto dynamics = m.def_submodule(

@@ -14,6 +14,7 @@
 #include "ernest/opt/metrics.hpp"
 #include "ernest/opt/nlopt_solver.hpp"
 #include "ernest/opt/transition.hpp"
+#include "interrupt.hpp"
 
 namespace py = pybind11;
 using namespace pybind11::literals;
@@ -441,6 +442,7 @@ void bind_opt(py::module_& m) {
         [](const TransitionProblem& problem, Strategy strategy, const CostWeights& weights,
            const TransitionOptions& options) {
           py::gil_scoped_release release;
+          interruptible scope;  // Ctrl-C between SLSQP objective evaluations
           return plan_transition(problem, strategy, weights, options);
         },
         "problem"_a, "strategy"_a, "weights"_a = CostWeights{}, "options"_a = TransitionOptions{},

@@ -8,6 +8,7 @@
 #include "bindings.hpp"
 #include "pose.hpp"
 #include "ernest/perception/stereo_mapper.hpp"
+#include "interrupt.hpp"
 
 namespace py = pybind11;
 using namespace pybind11::literals;
@@ -78,6 +79,7 @@ void bind_perception(py::module_& m) {
             FloatImage depth;
             {
               py::gil_scoped_release release;
+              interruptible scope;  // Ctrl-C between image rows
               r.render(p, camera, frame, image, depth);
             }
             return py::make_tuple(image, depth);
@@ -103,8 +105,11 @@ void bind_perception(py::module_& m) {
               throw std::invalid_argument("surface_heights: x and y have different shapes");
             Eigen::MatrixXd z(x.rows(), x.cols());
             py::gil_scoped_release release;
-            for (Eigen::Index i = 0; i < x.rows(); ++i)
+            interruptible scope;
+            for (Eigen::Index i = 0; i < x.rows(); ++i) {
+              ernest::poll_interrupt();  // Ctrl-C between rows
               for (Eigen::Index j = 0; j < x.cols(); ++j) z(i, j) = r.surface_height(x(i, j), y(i, j));
+            }
             return z;
           },
           "x"_a, "y"_a, "surface_height over arrays of equal shape.")
@@ -178,6 +183,7 @@ void bind_perception(py::module_& m) {
              const StereoCameraParameters& camera) {
             const Eigen::Isometry3d p = to_isometry(pose, "camera_pose");
             py::gil_scoped_release release;
+            interruptible scope;  // Ctrl-C before any cell changes
             return map.fuse_cloud(points, p, camera);
           },
           "points"_a, "camera_pose"_a, "camera"_a,
@@ -242,12 +248,13 @@ void bind_perception(py::module_& m) {
                     const StereoMapperOptions&>(),
            "terrain"_a, "boxes"_a, "options"_a = StereoMapperOptions{})
       .def("update", &StereoMapper::update, "time"_a, "chassis_position"_a, "chassis_rotation"_a,
-           py::call_guard<py::gil_scoped_release>(),
+           py::call_guard<py::gil_scoped_release, interruptible>(),
            "Re-centre the map; capture and fuse if a fusion is due. Returns whether it fused.")
       .def(
           "capture",
           [](StereoMapper& s, const Eigen::Vector3d& p, const Eigen::Matrix3d& r) {
             py::gil_scoped_release release;
+            interruptible scope;
             s.capture(p, r);
           },
           "chassis_position"_a, "chassis_rotation"_a, "Capture and fuse one frame now.")

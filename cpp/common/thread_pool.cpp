@@ -1,5 +1,7 @@
 #include "ernest/common/thread_pool.hpp"
 
+#include "ernest/common/interrupt.hpp"
+
 namespace ernest {
 
 ThreadPool::ThreadPool(int threads) {
@@ -16,6 +18,8 @@ ThreadPool::~ThreadPool() {
 }
 
 void ThreadPool::run_indices() {
+  // the workers stop with their caller on Ctrl-C (common/interrupt.hpp)
+  const InterruptScope::Join join(scope_);
   // Dynamic scheduling: rover steps differ in cost (contacts), so take indices one at a time.
   for (;;) {
     int i;
@@ -60,6 +64,7 @@ void ThreadPool::parallel_for(int n, const std::function<void(int)>& fn) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     task_ = &fn;
+    scope_ = InterruptScope::current();
     n_ = n;
     next_ = 0;
     error_ = nullptr;

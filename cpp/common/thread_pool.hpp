@@ -11,6 +11,8 @@
 
 namespace ernest {
 
+class InterruptScope;
+
 class ThreadPool {
  public:
   /// threads <= 1 runs everything in the calling thread.
@@ -31,6 +33,7 @@ class ThreadPool {
   std::mutex mutex_;
   std::condition_variable start_cv_, done_cv_;
   const std::function<void(int)>* task_ = nullptr;
+  InterruptScope* scope_ = nullptr;  // the caller's, joined by the workers
   int n_ = 0, next_ = 0, busy_ = 0;
   unsigned generation_ = 0;
   bool stop_ = false;

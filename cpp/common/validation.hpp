@@ -42,7 +42,15 @@ inline void require_finite(const char* owner, const char* field, double value) {
   throw std::invalid_argument(os.str());
 }
 
-/// Throws std::invalid_argument with a free-form message when `ok` is false.
+/// Throws std::invalid_argument with a free-form message when `ok` is false. A literal message
+/// picks this overload: nothing is built unless the check fails, so it is free in hot loops (the
+/// 400 Hz runtime loop calls FtsProcessor::update every tick; issue 17 item 6).
+inline void require(bool ok, const char* message) {
+  if (!ok) throw std::invalid_argument(message);
+}
+
+/// As above for a message built by the caller. The argument is built before the call even when
+/// the check passes: keep it out of per-step code (use the const char* overload or test first).
 inline void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
 }

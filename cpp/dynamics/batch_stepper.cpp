@@ -3,6 +3,7 @@
 #include <string>
 
 #include "ernest/common/exclusive_use.hpp"
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::dynamics {

@@ -10,6 +10,9 @@
 #include "ernest/common/thread_pool.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 
+namespace ernest {
+}
+
 namespace ernest::dynamics {
 
 class BatchStepper {
@@ -32,7 +35,9 @@ class BatchStepper {
   /// keep the current commands; n_steps physics steps for every rover; observations (may be
   /// nullptr): size() x RoverSim::kObservationSize. If rovers fail, all the others still step;
   /// then the first failure (by rover index) is rethrown, SimulationDiverged naming the rover.
-  /// One thread at a time: a second concurrent call throws ConcurrentUse.
+  /// One thread at a time: a second concurrent call throws ConcurrentUse. Interrupted (Ctrl-C
+  /// from Python, common/interrupt.hpp): every rover stops after a whole step, possibly after
+  /// different numbers of steps (each RoverSim's time says); all stay usable.
   void step(const double* commands, int n_steps, double* observations);
 
  private:

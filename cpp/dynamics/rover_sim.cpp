@@ -12,6 +12,7 @@
 #include <random>
 
 #include "ernest/common/exclusive_use.hpp"
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/dynamics/rover_sim_impl.hpp"
 
@@ -442,10 +443,13 @@ const Commands& RoverSim::commands() const { return impl_->cmd; }
 void RoverSim::set_command_vector(const double* c) {
   const ExclusiveUse busy(impl_->in_use, "RoverSim.set_command_vector");
   // the flags are 0 or 1: a NaN compares != 0 and would read as true (issue 18)
-  require(c[6] == 0.0 || c[6] == 1.0, "RoverSim commands: gimbal_enabled (column 6) = " +
-                                          std::to_string(c[6]) + " must be 0 or 1");
-  require(c[7] == 0.0 || c[7] == 1.0, "RoverSim commands: clutch_engage (column 7) = " +
-                                          std::to_string(c[7]) + " must be 0 or 1");
+  // messages built only on failure: this runs every step of a batch
+  if (!(c[6] == 0.0 || c[6] == 1.0))
+    throw std::invalid_argument("RoverSim commands: gimbal_enabled (column 6) = " +
+                                std::to_string(c[6]) + " must be 0 or 1");
+  if (!(c[7] == 0.0 || c[7] == 1.0))
+    throw std::invalid_argument("RoverSim commands: clutch_engage (column 7) = " +
+                                std::to_string(c[7]) + " must be 0 or 1");
   Commands k = impl_->cmd;
   k.wheel_mode = k.yaw_mode = k.roll_mode = ActuatorMode::Velocity;
   for (int i = 0; i < 4; ++i) k.wheel_speed[i] = c[i];
@@ -466,7 +470,10 @@ void RoverSim::step_n(int n) {
   const ExclusiveUse busy(impl_->in_use, "RoverSim.step_n");
   require(n >= 0, "RoverSim.step_n: n must be >= 0");
   impl_->run_ode([&] {
-    for (int k = 0; k < n; ++k) impl_->step();
+    for (int k = 0; k < n; ++k) {
+      if (k > 0) poll_interrupt();  // Ctrl-C: stop between whole steps (common/interrupt.hpp)
+      impl_->step();
+    }
   });
 }
 

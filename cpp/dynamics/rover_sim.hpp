@@ -244,6 +244,7 @@ class RoverSim {
 
   /// Advance one physics step; throws SimulationDiverged on a non-finite or absurd state.
   void step();
+  /// n steps. Interruptible (common/interrupt.hpp): stops between two whole steps, usable after.
   void step_n(int n);
 
   const RoverState& state() const;

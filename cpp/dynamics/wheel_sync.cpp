@@ -37,6 +37,44 @@ WheelJacobian wheel_jacobian(const RoverParameters& p, double psi, double phi, i
   return j;
 }
 
+namespace {
+
+using SyncCod = Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<double, 12, 11>>;
+
+// cod.solve(rhs) without its heap temporary: Eigen 3.4's applyZAdjointOnTheLeftInPlace allocates
+// a dynamic vector whenever A is rank-deficient (it is here), and the onboard loop calls this at
+// 50 Hz (issue 17 item 6). The same operations in the same order as Eigen's _solve_impl, so the
+// result is bit-identical (checked against cod.solve in tests/cpp/test_dynamics.cpp).
+Eigen::Matrix<double, 11, 1> cod_solve(const SyncCod& cod, const Eigen::Matrix<double, 12, 1>& rhs) {
+  Eigen::Matrix<double, 11, 1> dst;
+  const Eigen::Index rank = cod.rank(), cols = dst.rows();
+  if (rank == 0) return dst.setZero();
+  Eigen::Matrix<double, 12, 1> c = rhs;  // c = Q^* rhs
+  c.applyOnTheLeft(cod.householderQ().setLength(rank).adjoint());
+  dst.topRows(rank) = cod.matrixT().topLeftCorner(rank, rank).triangularView<Eigen::Upper>().solve(
+      c.topRows(rank));  // T z = c(1:rank)
+  if (rank < cols) {  // y = Z^* [z; 0]
+    dst.bottomRows(cols - rank).setZero();
+    double temp[11];
+    for (Eigen::Index k = 0; k < rank; ++k) {
+      if (k != rank - 1) dst.row(k).swap(dst.row(rank - 1));
+      dst.middleRows(rank - 1, cols - rank + 1)
+          .applyHouseholderOnTheLeft(cod.matrixQTZ().row(k).tail(cols - rank).adjoint(),
+                                     cod.zCoeffs()(k), temp);
+      if (k != rank - 1) dst.row(k).swap(dst.row(rank - 1));
+    }
+  }
+  dst = cod.colsPermutation() * dst;  // x = P^-1 y
+  return dst;
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 11, 1> pseudo_inverse_solve(const Eigen::Matrix<double, 12, 11>& a,
+                                                  const Eigen::Matrix<double, 12, 1>& y) {
+  return cod_solve(SyncCod(a), y);
+}
+
 WheelSyncResult synchronise_wheels(const RoverParameters& p, double psi, double phi, double vx,
                                    double wx, double wy, double psi_dot, double phi_dot) {
   // Physical ranges (1e200 used to pass and give infinite wheel speeds): the rates of Commands.
@@ -65,8 +103,7 @@ WheelSyncResult synchronise_wheels(const RoverParameters& p, double psi, double 
         -(j.col(0) * vx + j.col(3) * wx + j.col(4) * wy + j.col(6) * psi_dot + j.col(7) * phi_dot);
   }
   // eq 9: x = A^+ y, minimum-norm least squares through a complete orthogonal decomposition.
-  const Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<double, 12, 11>> cod(res.A);
-  res.x = cod.solve(res.y);
+  res.x = pseudo_inverse_solve(res.A, res.y);
   res.residual = (res.A * res.x - res.y).norm();
   for (int i = 0; i < 4; ++i) {
     const double vxi = res.x(3 + 2 * i), vzi = res.x(4 + 2 * i);

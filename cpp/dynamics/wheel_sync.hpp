@@ -34,6 +34,11 @@ struct WheelSyncResult {
 /// Solve eqs 4–10: build A (eq 6) and y (eq 8) from the Jacobians at (psi, phi), solve with the
 /// pseudo-inverse x = A^+ y (eq 9; the minimum-norm least-squares solution, which is the right
 /// pseudo-inverse solution when A has full row rank), and return the wheel speeds (eq 10).
+/// x = A^+ y (minimum-norm least squares, Eigen's CompleteOrthogonalDecomposition) without heap
+/// allocation; bit-identical to CompleteOrthogonalDecomposition(a).solve(y).
+Eigen::Matrix<double, 11, 1> pseudo_inverse_solve(const Eigen::Matrix<double, 12, 11>& a,
+                                                  const Eigen::Matrix<double, 12, 1>& y);
+
 WheelSyncResult synchronise_wheels(const RoverParameters& p, double psi, double phi, double vx,
                                    double wx, double wy, double psi_dot, double phi_dot);
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/dynamics/wheel_sync.hpp"
 
@@ -189,9 +190,13 @@ StepResult RoverEnv::step(const sensing::ActionVector& action) {
   double abs_roll_torque = 0.0;
   try {
     for (int i = 0; i < substeps_; ++i) {
+      if (i > 0) poll_interrupt();  // Ctrl-C inside a VecRoverEnv step (common/interrupt.hpp)
       physics_step(cmd);
       abs_roll_torque += std::abs(sim_->state().roll_torque);
     }
+  } catch (const Interrupted&) {
+    done_ = true;  // stopped part way through the policy step: the episode cannot go on
+    throw;
   } catch (const dynamics::SimulationDiverged& e) {
     // Never an exception out of step(): the episode ends, flagged (the agent is not to blame).
     out.diverged = true;

@@ -3,6 +3,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::envs {
@@ -25,28 +26,47 @@ ObservationBatch VecRoverEnv::reset(const std::vector<std::uint64_t>& seeds) {
           "VecRoverEnv.reset: need " + std::to_string(size()) + " seeds, got " +
               std::to_string(seeds.size()));
   ObservationBatch obs(size(), sensing::kObservationSize);
-  pool_.parallel_for(size(), [&](int i) { obs.row(i) = envs_[i]->reset(seeds[i]).transpose(); });
+  interrupted_ = true;  // until every environment is reset
+  pool_.parallel_for(size(), [&](int i) {
+    poll_interrupt();  // Ctrl-C between whole environment resets
+    obs.row(i) = envs_[i]->reset(seeds[i]).transpose();
+  });
+  interrupted_ = false;
   return obs;
 }
 
 void VecRoverEnv::step(const Eigen::Ref<const ActionBatch>& actions,
                        Eigen::Ref<ObservationBatch> observations, std::vector<StepResult>& results,
                        std::vector<char>& was_reset) {
-  require(actions.rows() == size() && observations.rows() == size(),
-          "VecRoverEnv.step: actions and observations need " + std::to_string(size()) + " rows");
+  if (actions.rows() != size() || observations.rows() != size())
+    throw std::invalid_argument("VecRoverEnv.step: actions and observations need " +
+                                std::to_string(size()) + " rows");
   require(actions.allFinite(), "VecRoverEnv.step: actions must be finite");
+  if (interrupted_)
+    throw std::logic_error("VecRoverEnv.step: an earlier step or reset was interrupted part way (some "
+                           "environments stepped, others not); call reset() first");
   results.assign(size(), StepResult{});
   was_reset.assign(size(), 0);
-  pool_.parallel_for(size(), [&](int i) {
-    RoverEnv& e = *envs_[i];
-    if (e.done()) {
-      results[i].observation = e.reset_next();
-      was_reset[i] = 1;
-    } else {
-      results[i] = e.step(actions.row(i).transpose());
-    }
-    observations.row(i) = results[i].observation.transpose();
-  });
+  try {
+    pool_.parallel_for(size(), [&](int i) { step_one(i, actions, observations, results, was_reset); });
+  } catch (const Interrupted&) {
+    interrupted_ = true;
+    throw;
+  }
+}
+
+void VecRoverEnv::step_one(int i, const Eigen::Ref<const ActionBatch>& actions,
+                           Eigen::Ref<ObservationBatch> observations, std::vector<StepResult>& results,
+                           std::vector<char>& was_reset) {
+  poll_interrupt();  // Ctrl-C (common/interrupt.hpp): between whole environment steps
+  RoverEnv& e = *envs_[i];
+  if (e.done()) {
+    results[i].observation = e.reset_next();
+    was_reset[i] = 1;
+  } else {
+    results[i] = e.step(actions.row(i).transpose());
+  }
+  observations.row(i) = results[i].observation.transpose();
 }
 
 }  // namespace ernest::envs

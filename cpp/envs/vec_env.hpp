@@ -26,6 +26,8 @@ class VecRoverEnv {
   /// Reset every environment: env i from seeds[i]. Returns the observations (num_envs x 45).
   ObservationBatch reset(const std::vector<std::uint64_t>& seeds);
   /// One policy step of every environment. actions: num_envs x 3 in [-1, 1].
+  /// Interrupted (Ctrl-C from Python, common/interrupt.hpp) between two environments' steps: the
+  /// batch is then partly stepped, so step() refuses (std::logic_error) until the next reset().
   void step(const Eigen::Ref<const ActionBatch>& actions, Eigen::Ref<ObservationBatch> observations,
             std::vector<StepResult>& results, std::vector<char>& was_reset);
 
@@ -36,6 +38,10 @@ class VecRoverEnv {
  private:
   std::vector<std::unique_ptr<RoverEnv>> envs_;
   ThreadPool pool_;
+  bool interrupted_ = false;  // a step or reset stopped part way: reset() first
+  void step_one(int i, const Eigen::Ref<const ActionBatch>& actions,
+                Eigen::Ref<ObservationBatch> observations, std::vector<StepResult>& results,
+                std::vector<char>& was_reset);
 };
 
 }  // namespace ernest::envs

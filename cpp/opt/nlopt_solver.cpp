@@ -7,6 +7,7 @@
 #include <nlopt.hpp>
 #include <stdexcept>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::opt {
@@ -74,6 +75,7 @@ double objective_trampoline(unsigned /*n*/, const double* x, double* grad, void*
   }
   ctx->last_call = now;
   try {
+    poll_interrupt();  // Ctrl-C (common/interrupt.hpp): captured, stopped and rethrown like any error
     ++ctx->evaluations;
     return ctx->problem->objective(x, grad);
   } catch (...) {
@@ -91,6 +93,7 @@ void constraint_trampoline(unsigned m, double* result, unsigned /*n*/, const dou
     return;
   }
   try {
+    poll_interrupt();  // as in the objective: captured, stopped, rethrown
     ctx->constraint->function(x, result, grad);
   } catch (...) {
     ctx->solve->error = std::current_exception();

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/opt/ode.hpp"
 
@@ -636,6 +637,7 @@ TransitionResult optimise(const TransitionProblem& problem, Strategy strategy,
     const double T = nt == 1 ? t_lo : t_lo * std::pow(t_hi / t_lo, a / (nt - 1.0));
     for (int b = 0; b < np; ++b) {
       const double sigma = P2 * b / np;
+      poll_interrupt();  // Ctrl-C between candidates (common/interrupt.hpp)
       const auto t_eval = std::chrono::steady_clock::now();
       std::vector<double> x = cost.bezier_guess(T, sigma);
       const double viol = cost.max_violation(x, lo, hi);
@@ -766,6 +768,8 @@ TransitionResult plan_transition(const TransitionProblem& problem, Strategy stra
     return r;
   } catch (const std::invalid_argument&) {
     throw;  // a bad problem or option is the caller's error, never a silent fallback
+  } catch (const Interrupted&) {
+    throw;  // Ctrl-C (common/interrupt.hpp) stops the caller, it is not a failed optimisation
   } catch (const std::exception& e) {
     if (!options.fallback) throw;
     reason = e.what();

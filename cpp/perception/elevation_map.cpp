@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::perception {
@@ -113,6 +114,7 @@ FuseStats ElevationMap::fuse_cloud(const Eigen::Ref<const Points>& points,
   const Eigen::RowVector3d rz = r.row(2);
   Eigen::Index m = 0;
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    if (i % 4096 == 0) poll_interrupt();  // Ctrl-C before any cell changes (common/interrupt.hpp)
     const Eigen::Vector3d p = points.row(i).transpose();
     if (!p.allFinite()) {
       ++stats.non_finite;

@@ -5,6 +5,7 @@
 #include <limits>
 #include <random>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::perception {
@@ -264,6 +265,7 @@ void Raycaster::render(const Eigen::Isometry3d& pose, const StereoCameraParamete
       for (int tu = u0; tu <= u1; ++tu) tiles[static_cast<std::size_t>(tv) * tw + tu].push_back(static_cast<int>(i));
   }
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();  // Ctrl-C between rows (common/interrupt.hpp); the raycaster is unchanged
     for (int u = 0; u < w; ++u) {
       const std::vector<int>& cand = tiles[static_cast<std::size_t>(v / kTile) * tw + u / kTile];
       const Eigen::Vector3d ray_cam((u - cx) / f, (v - cy) / f, 1.0);

@@ -9,8 +9,10 @@
 // --mode env (default) steps envs::RoverEnv exactly as the Python environment does (one
 // telemetry row per policy step); --mode onboard runs the 400 Hz ControlLoop on the simulator
 // interface (telemetry at 50 Hz). Prints progress along the path, travel reduction and cost of
-// transport (Table 6).
+// transport (Table 6). Exit status: 0 done, 1 runtime error, 2 usage error, 3 diverged.
+#include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -19,6 +21,7 @@
 #include <exception>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "ernest/dynamics/rover_parameters.hpp"
 #include "ernest/envs/rover_env.hpp"
@@ -26,8 +29,13 @@
 #include "ernest/runtime/policy.hpp"
 #include "ernest/runtime/sim_in_the_loop.hpp"
 #include "ernest/runtime/telemetry.hpp"
+#include "ernest/soil/soil_parameters.hpp"
 
 namespace {
+
+// Exit codes (also in --help and the README): 0 done, 1 a runtime error (policy file, I/O,
+// simulator), 2 a usage error (the command line itself), 3 the simulation diverged.
+constexpr int kExitError = 1, kExitUsage = 2, kExitDiverged = 3;
 
 // One error report for every command: policy errors name their kind; exit code 1.
 int report_error(const std::exception& e) {
@@ -36,7 +44,7 @@ int report_error(const std::exception& e) {
   } else {
     std::fprintf(stderr, "ernest_runtime: %s\n", e.what());
   }
-  return 1;
+  return kExitError;
 }
 
 void usage(std::FILE* out) {
@@ -46,9 +54,51 @@ void usage(std::FILE* out) {
                "                      [--soil m90|dry_sand|wet_sand] [--passive] [--quiet]\n"
                "                      [--terrain-source truth|stereo]\n"
                "       ernest_runtime --policy FILE --replay observations.csv --actions out.csv\n"
+               "       ernest_runtime --help\n"
                "scenarios:");
   for (const auto& n : ernest::envs::scenario_names()) std::fprintf(out, " %s", n.c_str());
-  std::fprintf(out, "\n");
+  std::fprintf(out,
+               "\nexit status: 0 done, 1 runtime error (policy file, I/O, simulator), 2 usage error,\n"
+               "             3 the simulation diverged\n");
+}
+
+// A usage error: its own message, a pointer to --help, exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The whole of `text` as a number (std::stod alone accepts "3abc" and "inf").
+double parse_double(const std::string& option, const std::string& text) {
+  size_t used = 0;
+  double v = 0.0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(v))
+    throw UsageError(option + " '" + text + "' is not a finite number");
+  return v;
+}
+
+long long parse_integer(const std::string& option, const std::string& text) {
+  size_t used = 0;
+  long long v = 0;
+  try {
+    v = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) throw UsageError(option + " '" + text + "' is not an integer");
+  return v;
+}
+
+void require_choice(const std::string& option, const std::string& value,
+                    const std::vector<std::string>& choices) {
+  if (std::find(choices.begin(), choices.end(), value) != choices.end()) return;
+  std::string list;
+  for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
+  throw UsageError(option + " '" + value + "' is not one of: " + list);
 }
 
 }  // namespace
@@ -59,41 +109,54 @@ int main(int argc, char** argv) {
               terrain_source = "truth";
   long long seed = -1;
   double duration = -1.0;
-  bool passive = false, quiet = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&](const char* name) -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "ernest_runtime: %s needs a value\n", name);
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    try {
-      if (a == "--policy") policy_path = value("--policy");
-      else if (a == "--scenario") scenario = value("--scenario");
-      else if (a == "--seed") seed = std::stoll(value("--seed"));
-      else if (a == "--duration") duration = std::stod(value("--duration"));
-      else if (a == "--telemetry") telemetry_path = value("--telemetry");
-      else if (a == "--actions") actions_path = value("--actions");
-      else if (a == "--replay") replay_path = value("--replay");
-      else if (a == "--mode") mode = value("--mode");
-      else if (a == "--soil") soil = value("--soil");
-      else if (a == "--terrain-source") terrain_source = value("--terrain-source");
+  bool passive = false, quiet = false, have_seed = false, have_duration = false;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw UsageError(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--policy") policy_path = value();
+      else if (a == "--scenario") scenario = value();
+      else if (a == "--seed") seed = parse_integer(a, value()), have_seed = true;
+      else if (a == "--duration") duration = parse_double(a, value()), have_duration = true;
+      else if (a == "--telemetry") telemetry_path = value();
+      else if (a == "--actions") actions_path = value();
+      else if (a == "--replay") replay_path = value();
+      else if (a == "--mode") mode = value();
+      else if (a == "--soil") soil = value();
+      else if (a == "--terrain-source") terrain_source = value();
       else if (a == "--passive") passive = true;
       else if (a == "--quiet") quiet = true;
       else if (a == "-h" || a == "--help") { usage(stdout); return 0; }
-      else { std::fprintf(stderr, "ernest_runtime: unknown argument %s\n", a.c_str()); usage(stderr); return 2; }
-    } catch (const std::exception&) {
-      std::fprintf(stderr, "ernest_runtime: invalid number for %s\n", a.c_str());
-      return 2;
+      else throw UsageError("unknown argument '" + a + "'");
     }
+    if (policy_path.empty()) throw UsageError("--policy FILE is required");
+    if (!replay_path.empty()) {
+      if (actions_path.empty()) throw UsageError("--replay needs --actions FILE (where the actions go)");
+      if (!scenario.empty() || have_seed || have_duration)
+        throw UsageError("--replay runs logged observations: --scenario, --seed and --duration do not apply");
+    } else {
+      if (scenario.empty()) throw UsageError("--scenario NAME is required");
+      require_choice("--scenario", scenario, envs::scenario_names());
+      if (!have_seed) throw UsageError("--seed N is required");
+      if (seed < 0) throw UsageError("--seed " + std::to_string(seed) + " must be >= 0");
+      if (!have_duration) throw UsageError("--duration S is required");
+      if (duration <= 0.0) throw UsageError("--duration " + std::to_string(duration) + " must be > 0");
+      require_choice("--mode", mode, {"env", "onboard"});
+      try {
+        soil::SoilParameters::preset(soil);
+      } catch (const std::invalid_argument& e) {
+        throw UsageError(std::string("--soil: ") + e.what());
+      }
+      require_choice("--terrain-source", terrain_source, {"truth", "stereo"});
+    }
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "ernest_runtime: error: %s\n(see ernest_runtime --help)\n", e.what());
+    return kExitUsage;
   }
   if (!replay_path.empty()) {
-    if (policy_path.empty() || actions_path.empty()) {
-      std::fprintf(stderr, "ernest_runtime: --replay needs --policy and --actions\n");
-      return 2;
-    }
     try {
       runtime::Policy policy(policy_path);
       std::ifstream in(replay_path);
@@ -128,13 +191,6 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
       return report_error(e);
     }
-  }
-  if (policy_path.empty() || scenario.empty() || seed < 0 || duration <= 0.0 ||
-      (mode != "env" && mode != "onboard")) {
-    std::fprintf(stderr, "ernest_runtime: --policy, --scenario, --seed >= 0 and --duration > 0 are required; "
-                         "--mode is env or onboard\n");
-    usage(stderr);
-    return 2;
   }
   try {
     envs::EnvOptions eo;
@@ -181,7 +237,7 @@ int main(int argc, char** argv) {
     std::printf("inference latency        median %.1f us, p99 %.1f us (%lld calls)\n", lat.median_us, lat.p99_us,
                 static_cast<long long>(lat.count));
     if (mode == "onboard") std::printf("watchdog trips           %ld\n", rep.watchdog_trips);
-    return rep.diverged ? 3 : 0;
+    return rep.diverged ? kExitDiverged : 0;
   } catch (const std::exception& e) {
     return report_error(e);
   }

@@ -4,6 +4,8 @@
 #include <openssl/evp.h>
 #include <torch/script.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <bit>
 #include <chrono>
@@ -11,10 +13,10 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "ernest/common/validation.hpp"
-#include "ernest/runtime/json.hpp"
 
 namespace ernest::runtime {
 
@@ -82,15 +84,31 @@ bool close(double a, double b, double rel) {
   return std::abs(a - b) <= rel * std::max({1.0, std::abs(a), std::abs(b)});
 }
 
-std::vector<double> number_array(const json::Value& root, const char* key, const std::string& path) {
-  const json::Value* v = root.find(key);
-  if (!v || !v->is_array()) mismatch(path, std::string("field '") + key + "' is missing or not an array");
+std::vector<double> number_array(const nlohmann::json& root, const char* key, const std::string& path) {
+  const auto it = root.find(key);
+  if (it == root.end() || !it->is_array()) mismatch(path, std::string("field '") + key + "' is missing or not an array");
   std::vector<double> out;
-  for (const auto& e : v->array) {
+  for (const auto& e : *it) {
     if (!e.is_number()) mismatch(path, std::string("field '") + key + "' has a non-number entry");
-    out.push_back(e.number);
+    out.push_back(e.get<double>());
   }
   return out;
+}
+
+// RFC 8259 via nlohmann::json (strict: no NaN/inf/hex, checked surrogates, locale-independent),
+// plus a rule RFC 8259 leaves open: a member name repeated in one object is an error, not "the
+// last one wins" (two different obs_scale tables in one file must not pass silently).
+nlohmann::json parse_strict(const std::string& text) {
+  std::vector<std::set<std::string>> keys;  // member names of each open object
+  auto cb = [&](int /*depth*/, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
+    if (event == E::object_start) keys.emplace_back();
+    else if (event == E::object_end && !keys.empty()) keys.pop_back();
+    else if (event == E::key && !keys.empty() && !keys.back().insert(parsed.get<std::string>()).second)
+      throw std::invalid_argument("duplicate member name \"" + parsed.get<std::string>() + "\"");
+    return true;
+  };
+  return nlohmann::json::parse(text, cb);
 }
 
 void compare_vector(const std::string& path, const char* key, const std::vector<double>& got,
@@ -102,6 +120,10 @@ void compare_vector(const std::string& path, const char* key, const std::vector<
     if (!close(got[i], want[static_cast<Eigen::Index>(i)], rel)) {
       std::ostringstream os;
       os << key << "[" << i << "] = " << got[i] << ", expected " << want[static_cast<Eigen::Index>(i)];
+      if (std::string(key) == "obs_scale")
+        os << " (" << sensing::observation_names()[i]
+           << "): the policy was trained with another observation scale table than "
+              "sensing::ObservationScales";
       mismatch(path, os.str());
     }
 }
@@ -139,10 +161,10 @@ std::string weights_sha256(const torch::jit::Module& module) {
 PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations& expect,
                               const std::string& path) {
   expect.validate();
-  json::Value root;
+  nlohmann::json root;
   try {
-    root = json::parse(text);
-  } catch (const json::ParseError& e) {
+    root = parse_strict(text);
+  } catch (const std::exception& e) {  // nlohmann::json::parse_error or a duplicate member
     throw PolicyError(PolicyError::Kind::MissingMetadata,
                       path + ": " + Policy::kMetadataFile + " is not valid JSON (" + e.what() + ")");
   }
@@ -152,19 +174,21 @@ PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations&
   PolicyMetadata m;
   m.json = text;
   auto str = [&](const char* key) {
-    const json::Value* v = root.find(key);
-    if (!v || !v->is_string()) mismatch(path, std::string("field '") + key + "' is missing or not a string");
-    return v->string;
+    const auto v = root.find(key);
+    if (v == root.end() || !v->is_string()) mismatch(path, std::string("field '") + key + "' is missing or not a string");
+    return v->get<std::string>();
   };
   auto num = [&](const char* key) {
-    const json::Value* v = root.find(key);
-    if (!v || !v->is_number()) mismatch(path, std::string("field '") + key + "' is missing or not a number");
-    return v->number;
+    const auto v = root.find(key);
+    if (v == root.end() || !v->is_number()) mismatch(path, std::string("field '") + key + "' is missing or not a number");
+    return v->get<double>();
   };
   m.format = str("format");
   if (m.format != "ernest-policy-v1") mismatch(path, "format '" + m.format + "', expected 'ernest-policy-v1'");
   m.layout_version = str("layout_version");
-  if (m.layout_version != expect.layout_version)
+  const auto& legacy = expect.legacy_layout_versions;
+  if (m.layout_version != expect.layout_version &&
+      std::find(legacy.begin(), legacy.end(), m.layout_version) == legacy.end())
     mismatch(path, "layout_version '" + m.layout_version + "', the runtime builds '" +
                        expect.layout_version + "'");
   m.obs_dim = static_cast<int>(num("obs_dim"));
@@ -194,14 +218,14 @@ PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations&
                  expect.rel_tol);
   compare_vector(path, "action_high", m.action_high,
                  Eigen::Vector3d(l.vx_max, l.yaw_rate_max, l.roll_rate_max), expect.rel_tol);
-  if (const json::Value* h = root.find("weights_sha256")) {
-    if (!h->is_string() || h->string.size() != 64)
+  if (const auto h = root.find("weights_sha256"); h != root.end()) {
+    if (!h->is_string() || h->get_ref<const std::string&>().size() != 64)
       mismatch(path, "field 'weights_sha256' is not a 64-digit hex string");
-    m.weights_sha256 = h->string;
+    m.weights_sha256 = h->get<std::string>();
   }
-  if (const json::Value* names = root.find("observation_names"); names && names->is_array())
-    for (const auto& n : names->array)
-      if (n.is_string()) m.observation_names.push_back(n.string);
+  if (const auto names = root.find("observation_names"); names != root.end() && names->is_array())
+    for (const auto& n : *names)
+      if (n.is_string()) m.observation_names.push_back(n.get<std::string>());
   return m;
 }
 

@@ -49,6 +49,9 @@ const char* to_string(PolicyError::Kind kind);
 /// limits it enforces. Defaults = the layout of cpp/sensing/observation.hpp.
 struct PolicyExpectations {
   std::string layout_version = "ernest-obs-v" + std::to_string(sensing::kObservationLayoutVersion);
+  /// Older versions with the same order and size, accepted when their obs_scale is `scales`
+  /// (version 1 files were written with two different tables under one name; issue 18).
+  std::vector<std::string> legacy_layout_versions = {"ernest-obs-v1"};
   sensing::ObservationScales scales{};
   sensing::ActionLimits limits{};
   double policy_rate_hz = 2.0;  ///< Table 5

@@ -8,7 +8,12 @@ namespace ernest::sensing {
 
 void FtsFilterOptions::validate() const {
   require_positive("FtsFilterOptions", "sample_rate", sample_rate);
-  require_in_range("FtsFilterOptions", "cutoff", cutoff, 1e-6, sample_rate / 2.0);
+  try {
+    require_in_range("FtsFilterOptions", "cutoff", cutoff, 1e-6, sample_rate / 2.0);
+  } catch (const std::invalid_argument& e) {  // a coupled bound: name the other field too
+    throw std::invalid_argument(std::string(e.what()) +
+                                " (the upper bound is sample_rate / 2, the Nyquist frequency)");
+  }
 }
 
 FtsProcessor::FtsProcessor(const FtsFilterOptions& options) : options_(options) {

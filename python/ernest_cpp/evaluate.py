@@ -43,9 +43,12 @@ def controllers(policy_file: str | None):
 
         from . import sensing
 
+        from .rl.layout import check_policy_layout
+
         module, meta = load_policy(policy_file)
         scale = np.asarray(sensing.ObservationScales().divisors())
         check_policy_sizes(module, meta, policy_file)
+        check_policy_layout(meta, policy_file)  # the module divides by its own table: same one
 
         def learned(obs, env=None):
             # the exported module takes physical observations and returns (Vx, yaw rate, roll rate)

@@ -1,10 +1,15 @@
-// cpp/common: vector maths used by the soil model's hot loop.
+// cpp/common: vector maths used by the soil model's hot loop; cooperative interruption.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <string>
 #include <vector>
 
+#include "ernest/common/interrupt.hpp"
+#include "ernest/common/thread_pool.hpp"
 #include "ernest/common/vector_math.hpp"
 
 using namespace ernest;
@@ -57,4 +62,82 @@ TEST(VectorMath, EveryBackendMatchesTheScalarLibraryWithinFourUlp) {
   }
   EXPECT_GE(checked, 1);
   ASSERT_TRUE(set_vector_math_backend(best.c_str()));
+}
+
+// ---- interrupt.hpp ---------------------------------------------------------------------------
+
+namespace {
+std::atomic<int> g_checks{0};
+std::atomic<bool> g_stop{false};
+bool count_and_answer() {
+  ++g_checks;
+  return g_stop.load();
+}
+}  // namespace
+
+TEST(Interrupt, PollingOutsideAScopeDoesNothing) {
+  EXPECT_EQ(InterruptScope::current(), nullptr);
+  for (int i = 0; i < 1000; ++i) poll_interrupt();
+}
+
+TEST(Interrupt, TheCheckRunsOncePerIntervalAndStopsEveryPollAfter) {
+  g_checks = 0;
+  g_stop = false;
+  InterruptScope scope(&count_and_answer, std::chrono::milliseconds(20));
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - t0 < std::chrono::milliseconds(110)) poll_interrupt();
+  EXPECT_GE(g_checks.load(), 1);  // ~5 intervals of 20 ms (fewer on a loaded machine), never more
+  EXPECT_LE(g_checks.load(), 6);
+  g_stop = true;
+  std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  EXPECT_THROW(poll_interrupt(), Interrupted);
+  EXPECT_TRUE(scope.stopped());
+  const int checks = g_checks.load();
+  EXPECT_THROW(poll_interrupt(), Interrupted);  // stays stopped, without asking again
+  EXPECT_EQ(g_checks.load(), checks);
+}
+
+TEST(Interrupt, NestedScopesRestoreTheOuterOne) {
+  InterruptScope outer(&count_and_answer);
+  {
+    InterruptScope inner(&count_and_answer);
+    EXPECT_EQ(InterruptScope::current(), &inner);
+  }
+  EXPECT_EQ(InterruptScope::current(), &outer);
+}
+
+TEST(Interrupt, ThreadPoolWorkersStopWithTheirCaller) {
+  // the caller's check says stop after ~30 ms: every task polls in a loop, so every worker must
+  // leave through Interrupted (only the caller asks; the workers see the flag)
+  g_checks = 0;
+  g_stop = false;
+  ThreadPool pool(3);
+  InterruptScope scope(&count_and_answer, std::chrono::milliseconds(5));
+  std::atomic<int> started{0}, stopped{0};
+  const auto t0 = std::chrono::steady_clock::now();
+  std::thread stopper([&] {
+    // stop once all three tasks run (or after 10 s, which fails the test below)
+    while (started.load() < 3 && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10))
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    g_stop = true;
+  });
+  EXPECT_THROW(pool.parallel_for(3, [&](int) {
+    ++started;
+    try {
+      for (;;) poll_interrupt();
+    } catch (const Interrupted&) {
+      ++stopped;
+      throw;
+    }
+  }), Interrupted);
+  stopper.join();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(stopped.load(), 3);
+  EXPECT_LT(seconds, 9.0);
+  // the pool is usable afterwards, with or without a scope
+  std::atomic<int> sum{0};
+  g_stop = false;
+  InterruptScope fresh(&count_and_answer);
+  pool.parallel_for(8, [&](int i) { sum += i; });
+  EXPECT_EQ(sum.load(), 28);
 }

@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <Eigen/QR>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 
@@ -243,6 +245,22 @@ TEST(GimbalSuspension, RollTorqueLiftsWheelWithClutchEngagedOnly) {
     sim->step_n(100);
     EXPECT_NEAR(sim->state().roll_torque, 0.0, 1e-6);
     for (int i = 0; i < 4; ++i) EXPECT_NEAR(sim->state().wheel_load[i], loads0[i], 0.01 * loads0[i]);
+  }
+}
+
+TEST(WheelSync, PseudoInverseSolveIsEigensCodSolveBitForBit) {
+  // the allocation-free copy of CompleteOrthogonalDecomposition::solve, on full-rank and
+  // rank-deficient systems (the synchroniser's A is rank-deficient)
+  std::srand(7);
+  for (int t = 0; t < 60; ++t) {
+    Eigen::Matrix<double, 12, 11> a = Eigen::Matrix<double, 12, 11>::Random();
+    if (t % 2) a.col(3) = 0.5 * a.col(1) + a.col(7);
+    if (t % 3 == 0) a.col(9) = a.col(2), a.col(10) = -a.col(4);
+    const Eigen::Matrix<double, 12, 1> y = Eigen::Matrix<double, 12, 1>::Random();
+    const Eigen::Matrix<double, 11, 1> want =
+        Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<double, 12, 11>>(a).solve(y);
+    const Eigen::Matrix<double, 11, 1> got = pseudo_inverse_solve(a, y);
+    EXPECT_EQ(std::memcmp(got.data(), want.data(), sizeof(double) * 11), 0) << t;
   }
 }
 

@@ -13,90 +13,19 @@
 
 #include "ernest/envs/rover_env.hpp"
 #include "ernest/runtime/control_loop.hpp"
-#include "ernest/runtime/json.hpp"
 #include "ernest/runtime/policy.hpp"
 #include "ernest/runtime/safety.hpp"
 #include "ernest/runtime/sim_in_the_loop.hpp"
 #include "ernest/runtime/sim_interface.hpp"
 #include "ernest/runtime/telemetry.hpp"
+#include "runtime_policies.hpp"
 
 using namespace ernest;
 using runtime::PolicyError;
+using namespace ernest::testing_policies;
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path tmpdir() {
-  static const fs::path d = [] {
-    fs::path p = fs::temp_directory_path() / ("ernest_test_runtime_" + std::to_string(::getpid()));
-    fs::create_directories(p);
-    return p;
-  }();
-  return d;
-}
-
-std::string vec_json(const Eigen::VectorXd& v) {
-  std::ostringstream os;
-  os.precision(17);
-  os << "[";
-  for (Eigen::Index i = 0; i < v.size(); ++i) os << (i ? ", " : "") << v[i];
-  os << "]";
-  return os.str();
-}
-
-// Metadata as python/ernest_cpp/rl/export.py writes it, for the runtime's layout; `edit` may
-// replace one field's JSON text.
-std::string metadata_json(const std::string& field = "", const std::string& value = "") {
-  const sensing::ObservationScales sc;
-  const sensing::ActionLimits l;
-  std::map<std::string, std::string> f = {
-      {"format", "\"ernest-policy-v1\""},
-      {"layout_version", "\"ernest-obs-v1\""},
-      {"obs_dim", "45"},
-      {"act_dim", "3"},
-      {"policy_rate_hz", "2.0"},
-      {"obs_offset", vec_json(Eigen::VectorXd::Zero(45))},
-      {"obs_scale", vec_json(sc.divisors())},
-      {"action_low", vec_json(Eigen::Vector3d(0.0, -l.yaw_rate_max, -l.roll_rate_max))},
-      {"action_high", vec_json(Eigen::Vector3d(l.vx_max, l.yaw_rate_max, l.roll_rate_max))},
-      {"observation_names", "[\"heading_deviation\"]"}};
-  if (!field.empty()) f[field] = value;
-  std::string s = "{";
-  bool first = true;
-  for (const auto& [k, v] : f) {
-    if (v.empty()) continue;  // empty value = drop the field
-    s += (first ? "\"" : ", \"") + k + "\": " + v;
-    first = false;
-  }
-  return s + "}";
-}
-
-// Save a TorchScript module with the given forward body (and buffers) and metadata.
-std::string save_module(const std::string& name, const std::string& src,
-                        const std::map<std::string, torch::Tensor>& buffers,
-                        const std::string* meta = nullptr) {
-  torch::jit::Module m("__torch__.TestPolicy_" + name);
-  for (const auto& [k, t] : buffers) m.register_buffer(k, t);
-  m.define(src);
-  const std::string path = (tmpdir() / (name + ".pt")).string();
-  const std::string md = metadata_json();
-  torch::jit::ExtraFilesMap extra;
-  if (!meta) extra["ernest_metadata.json"] = md;
-  else if (!meta->empty()) extra["ernest_metadata.json"] = *meta;
-  m.save(path, extra);
-  return path;
-}
-
-// Returns the first three PHYSICAL observation entries as the command.
-std::string identity_policy(const std::string& name = "identity", const std::string* meta = nullptr) {
-  return save_module(name, "def forward(self, x):\n  return x[0:3] * 1.0\n", {}, meta);
-}
-
-// Constant command c (Vx, yaw rate, roll rate), whatever the input.
-std::string constant_policy(const std::string& name, const Eigen::Vector3d& c) {
-  return save_module(name, "def forward(self, x):\n  return self.c + 0.0 * x[0:3]\n",
-                     {{"c", torch::tensor({float(c[0]), float(c[1]), float(c[2])})}});
-}
 
 // A random 45-64-3 tanh MLP on the normalised observation, mapped to the action ranges like
 // rl/export.py's ExportedPolicy: a policy whose commands depend on every input.
@@ -204,11 +133,11 @@ TEST(PolicyLoad, MetadataLayoutMismatch) {
   sensing::ObservationScales other;
   other.force = 100.0;  // a policy trained with another scaling table
   const std::vector<Case> cases = {
-      {"layout_version", "\"ernest-obs-v2\"", "layout_version 'ernest-obs-v2'"},
+      {"layout_version", "\"ernest-obs-v99\"", "layout_version 'ernest-obs-v99'"},
       {"obs_dim", "44", "obs_dim 44"},
       {"act_dim", "2", "act_dim 2"},
       {"policy_rate_hz", "10.0", "policy_rate_hz 10"},
-      {"obs_scale", vec_json(other.divisors()), "obs_scale[6] = 100"},
+      {"obs_scale", vec_json(other.divisors()), "obs_scale[6] = 100, expected 200 (fts_FL_Fx)"},
       {"obs_offset", vec_json(Eigen::VectorXd::Constant(45, 0.5)), "obs_offset[0]"},
       {"action_high", "[0.5, 0.349, 0.1745]", "action_high[0] = 0.5"},
       {"format", "\"something-else\"", "format 'something-else'"},
@@ -223,6 +152,22 @@ TEST(PolicyLoad, MetadataLayoutMismatch) {
     EXPECT_TRUE(contains(msg, "does not match the runtime's observation layout")) << msg;
     EXPECT_TRUE(contains(msg, c.expect_in_message)) << c.field << ": " << msg;
   }
+}
+
+TEST(PolicyLoad, LegacyLayoutVersionOnlyWithTheSameTable) {
+  // Version 1 files carry one of two tables (issue 18): the runtime's one loads, the other (rl.layout's
+  // former torque 50 N m, elevation 0.3 m, lateral 1 m) is refused naming the first entry that differs.
+  const std::string v1 = metadata_json("layout_version", "\"ernest-obs-v1\"");
+  runtime::Policy p(identity_policy("legacy_v1", &v1));
+  EXPECT_EQ(p.metadata().layout_version, "ernest-obs-v1");
+  sensing::ObservationScales python_v1;
+  python_v1.torque = 50.0, python_v1.elevation = 0.3, python_v1.lateral = 1.0;
+  std::string text = metadata_json("obs_scale", vec_json(python_v1.divisors()));
+  text.replace(text.find("ernest-obs-v2"), 13, "ernest-obs-v1");
+  std::string msg;
+  EXPECT_EQ(load_error(identity_policy("legacy_v1_other", &text), &msg), PolicyError::Kind::LayoutMismatch);
+  EXPECT_TRUE(contains(msg, "obs_scale[1] = 1, expected 2 (lateral_deviation): the policy was trained "
+                            "with another observation scale table")) << msg;
 }
 
 TEST(PolicyLoad, WrongInputSize) {
@@ -241,21 +186,45 @@ TEST(PolicyLoad, WrongOutputSize) {
   EXPECT_TRUE(contains(msg, "returns 4 values")) << msg;
 }
 
-TEST(PolicyLoad, JsonReader) {
-  const auto v = runtime::json::parse(R"( {"a": [1, -2.5e-3, true, null], "s": "x\"\u00e9", "o": {}} )");
-  ASSERT_TRUE(v.is_object());
-  EXPECT_DOUBLE_EQ(v.find("a")->array[1].number, -2.5e-3);
-  EXPECT_EQ(v.find("s")->string, "x\"\xc3\xa9");
-  EXPECT_THROW(runtime::json::parse("{\"a\": NaN}"), runtime::json::ParseError);
-  EXPECT_THROW(runtime::json::parse("[1, 2"), runtime::json::ParseError);
-  EXPECT_THROW(runtime::json::parse("{} x"), runtime::json::ParseError);
+TEST(PolicyLoad, MetadataIsStrictJson) {
+  // conformant RFC 8259 (nlohmann::json): escapes and exponents read, everything else refused
+  // with the file named; a repeated member name is refused too (it would hide a second table)
+  const runtime::PolicyExpectations expect;
+  std::string text = metadata_json("observation_names", R"(["x\"\u00e9", "\ud83d\ude00"])");
+  const runtime::PolicyMetadata m = runtime::check_metadata(text, expect, "p.pt");
+  ASSERT_EQ(m.observation_names.size(), 2u);
+  EXPECT_EQ(m.observation_names[0], "x\"\xc3\xa9");
+  EXPECT_EQ(m.observation_names[1], "\xf0\x9f\x98\x80");
+  EXPECT_EQ(runtime::check_metadata(metadata_json("policy_rate_hz", "2e0"), expect, "p.pt").policy_rate_hz, 2.0);
+  const std::vector<std::string> bad = {
+      metadata_json("policy_rate_hz", "NaN"), metadata_json("policy_rate_hz", "-inf"),
+      metadata_json("policy_rate_hz", "0x2"), metadata_json("policy_rate_hz", "+2"),
+      metadata_json("observation_names", R"(["\udc00"])"),  // lone low surrogate
+      metadata_json().substr(0, 40), metadata_json() + " x",
+      metadata_json("act_dim", "3, \"act_dim\": 4")};  // duplicate member
+  for (const std::string& b : bad) {
+    try {
+      runtime::check_metadata(b, expect, "p.pt");
+      ADD_FAILURE() << "accepted: " << b.substr(0, 200);
+    } catch (const PolicyError& e) {
+      EXPECT_EQ(e.kind(), PolicyError::Kind::MissingMetadata) << e.what();
+      EXPECT_TRUE(contains(e.what(), "p.pt: ernest_metadata.json is not valid JSON")) << e.what();
+    }
+  }
+  std::string msg;
+  try {
+    runtime::check_metadata(bad.back(), expect, "p.pt");
+  } catch (const PolicyError& e) {
+    msg = e.what();
+  }
+  EXPECT_TRUE(contains(msg, "duplicate member name \"act_dim\"")) << msg;
 }
 
 // ---------------------------------------------------------------------------------------------
 // Inference
 TEST(PolicyInference, FeedsPhysicalObservationAndReturnsCommand) {
   runtime::Policy p(identity_policy());
-  EXPECT_EQ(p.metadata().layout_version, "ernest-obs-v1");
+  EXPECT_EQ(p.metadata().layout_version, "ernest-obs-v2");
   sensing::ObservationVector obs = sensing::ObservationVector::Zero();
   obs[0] = 0.25;   // heading deviation / pi
   obs[1] = -0.5;   // lateral / 2 m

@@ -185,7 +185,8 @@ def test_exploration_reset_and_gaussian():
 def test_paper_layout_and_noise_scales():
     lay = L.paper_layout()
     assert lay.obs_dim == 45 and lay.act_dim == 3  # Table 5
-    assert lay.names[6] == "fts0_Fx" and lay.names[29] == "fts3_Tz" and lay.names[42] == "action_vx"
+    assert lay.names[6] == "fts_FL_Fx" and lay.names[29] == "fts_RR_Tz"
+    assert lay.names[42] == "action_vx"
     idx, std = lay.noise_std_normalised()
     assert sorted(idx.tolist()) == list(range(6, 30))  # only the 4×6 FTS values
     for i, s in zip(idx, std):
@@ -223,7 +224,7 @@ def test_noise_injection_only_fts_redrawn_and_storage_untouched():
             diffs.append(d[:, idx])
         assert np.array_equal(b["act"], stored["act"][rows])
     do, dn = np.concatenate(diffs_o), np.concatenate(diffs_n)
-    # Per-component std is σ/scale (10 N/200 N, 2 N·m/50 N·m) on both states, independent draws.
+    # Per-component std is σ/scale (10 N/200 N, 2 N·m/40 N·m) on both states, independent draws.
     np.testing.assert_allclose(do.std(axis=0), std, rtol=0.05)
     np.testing.assert_allclose(dn.std(axis=0), std, rtol=0.05)
     assert abs(np.corrcoef(do[:, 0], dn[:, 0])[0, 1]) < 0.03
@@ -494,7 +495,7 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
     assert cli.main(["train", "--env", POINT_MASS, "--run-dir", run, "--steps", "300",
                      "--set", "checkpoint.every_steps=300"] + common) == 0
     out = capsys.readouterr().out
-    assert "layout ernest-obs-v1" in out and "FTS noise on 24 components" in out
+    assert "layout ernest-obs-v2" in out and "FTS noise on 24 components" in out
     assert os.path.isdir(os.path.join(run, "tb"))  # TensorBoard logs
     assert cli.main(["train", "--run-dir", run, "--resume", "--steps", "400"]) == 0
     assert load_checkpoint(run, with_buffer=False)["state"]["step"] == 400
@@ -509,7 +510,13 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
         assert len(fh.read().splitlines()) == 3
     capsys.readouterr()
     assert cli.main(["train", "--env", "ernest-toy/DoesNotExist-v0"]) == 2
-    assert "not registered" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "unknown environment id 'ernest-toy/DoesNotExist-v0'" in err and POINT_MASS in err
+    # issue 18: an unknown rover id names itself and the valid ids, not a missing package
+    assert cli.main(["train", "--env", "ernest/Moon-v0"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown environment id 'ernest/Moon-v0'" in err, err
+    assert "ernest/Slope-v0" in err and "ernest/RockField-v0" in err and "not available" not in err
     assert cli.main(["train", "--env", POINT_MASS, "--set", "td3.batchsize=3"]) == 2
     assert "unknown setting 'td3.batchsize'" in capsys.readouterr().err
     assert scenario_env_id("slope") == "ernest/Slope-v0"

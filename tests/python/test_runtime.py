@@ -186,10 +186,62 @@ def test_runtime_rejects_wrong_files_clearly(exported, tmp_path):
     r = run_runtime("--policy", str(tmp_path / "missing.pt"), "--scenario", "flat", "--seed", "1",
                     "--duration", "1")
     assert r.returncode == 1 and "missing file" in r.stderr and "missing.pt" in r.stderr
-    # A policy exported with another normalisation table (rl.layout's own paper defaults) does
-    # not match the environments' observation layout: refused before anything runs.
+    # A policy exported with another normalisation table (the one rl.layout used to hold under
+    # the same version 1) does not match the runtime's observation layout: refused before
+    # anything runs, naming the first entry that differs.
     other = str(tmp_path / "other_layout.pt")
-    export_actor(actor, L.paper_layout(), other)
+    sc = sensing.ObservationScales()
+    sc.torque, sc.elevation, sc.lateral = 50.0, 0.3, 1.0
+    lay = L.ernest_layout(sc)
+    lay.version = "ernest-obs-v1"
+    export_actor(actor, lay, other)
     r = run_runtime("--policy", other, "--scenario", "flat", "--seed", "1", "--duration", "1")
     assert r.returncode == 1, r.stdout
-    assert "layout mismatch" in r.stderr and "obs_scale[1]" in r.stderr, r.stderr
+    assert "layout mismatch" in r.stderr and "obs_scale[1] = 1, expected 2 (lateral_deviation)" \
+        in r.stderr and "another observation scale table" in r.stderr, r.stderr
+
+
+def test_runtime_usage_errors_are_distinct_with_exit_code_2(tmp_path):
+    # issue 18 item 3: each usage error has its own message; all exit with 2 (documented in --help)
+    r = run_runtime("--help")
+    assert r.returncode == 0 and "exit status" in r.stdout and "2 usage error" in r.stdout
+    ok = ["--policy", "p.pt", "--scenario", "flat", "--seed", "1", "--duration", "1"]
+
+    def without(*names):
+        out, skip = [], False
+        for a in ok:
+            if skip:
+                skip = False
+            elif a in names:
+                skip = True
+            else:
+                out.append(a)
+        return out
+
+    cases = [
+        (["--bogus"], "unknown argument '--bogus'"),
+        (["--policy"], "--policy needs a value"),
+        (without("--policy"), "--policy FILE is required"),
+        (without("--scenario"), "--scenario NAME is required"),
+        (without("--seed"), "--seed N is required"),
+        (without("--duration"), "--duration S is required"),
+        (ok[:5] + ["abc"] + ok[6:], "--seed 'abc' is not an integer"),
+        (ok[:5] + ["-4"] + ok[6:], "--seed -4 must be >= 0"),
+        (ok[:7] + ["3x"], "--duration '3x' is not a finite number"),
+        (ok[:7] + ["inf"], "--duration 'inf' is not a finite number"),
+        (ok[:7] + ["0"], "must be > 0"),
+        (ok[:3] + ["moon"] + ok[4:], "--scenario 'moon' is not one of: "),
+        (ok + ["--mode", "fast"], "--mode 'fast' is not one of: env, onboard"),
+        (ok + ["--soil", "clay"], "--soil: "),
+        (ok + ["--terrain-source", "lidar"], "--terrain-source 'lidar' is not one of"),
+        (["--policy", "p.pt", "--replay", "obs.csv"], "--replay needs --actions"),
+        (["--policy", "p.pt", "--replay", "o.csv", "--actions", "a.csv", "--seed", "1"],
+         "--replay runs logged observations"),
+    ]
+    messages = set()
+    for args, want in cases:
+        r = run_runtime(*args)
+        assert r.returncode == 2, (args, r.stderr)
+        assert want in r.stderr and "ernest_runtime --help" in r.stderr, (args, r.stderr)
+        messages.add(r.stderr.splitlines()[0])
+    assert len(messages) == len(cases)

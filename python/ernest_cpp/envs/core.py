@@ -81,10 +81,7 @@ def observation_layout(options: _envs.EnvOptions):
     ``obs * scale``; the exported policy takes physical values and applies the same table."""
     from ..rl import layout as L  # numpy only; does not load torch
 
-    return L.ObservationLayout(f"ernest-obs-v{sensing.OBSERVATION_LAYOUT_VERSION}",
-                               list(sensing.observation_names()), np.zeros(sensing.OBSERVATION_SIZE),
-                               np.asarray(options.scales.divisors()), L.ACTION_LOW, L.ACTION_HIGH,
-                               L.paper_noise_groups())
+    return L.ernest_layout(options.scales)
 
 
 #: ``reset(options=...)`` keys the environments honour: none (an episode is set by the gym.make

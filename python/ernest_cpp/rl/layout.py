@@ -10,17 +10,21 @@ idx   name                     meaning
 1     lateral_deviation        signed distance from the path, eq 37 [m]
 2-3   roll, pitch              chassis inclination w.r.t. gravity [rad]
 4-5   gimbal_yaw, gimbal_roll  Active Gimbal Suspension joint positions [rad]
-6-29  fts{k}_{Fx..Tz}          4 sensors × (Fx, Fy, Fz, Tx, Ty, Tz), processed [N, N·m]
-30-41 elev{k}                  12 terrain elevations relative to the chassis [m]
+6-29  fts_{FL..RR}_{Fx..Tz}    4 sensors × (Fx, Fy, Fz, Tx, Ty, Tz), processed [N, N·m]
+30-41 elev_{FL..RR}_{0..2}     12 terrain elevations relative to the chassis [m]
 42-44 action_vx, _yaw, _roll   the currently applied action (normalised, [-1, 1])
 ====  =======================  ======================================================
 
 Every component is normalised "with respect to its maximum expected value" (§4.2):
-``normalised = (physical - offset) / scale``. The paper does not print its table of maximum values,
-so the scales below are OUR ASSUMPTIONS (documented per entry); the rover environments of issue 5 may
-publish their own table through an ``observation_normalisation`` attribute ``(offset, scale)`` on the
-unwrapped env, which then takes precedence. Force–torque noise (σ = 10 N per force, 2 N·m per torque,
-§4.2) is specified in physical units and converted through this table: σ_normalised = σ / scale.
+``normalised = (physical - offset) / scale``. The paper does not print its table of maximum values;
+ours (an assumption, reasons in cpp/sensing/observation.cpp) has ONE source: the C++
+``sensing::ObservationScales`` (bound as ``ernest_cpp.sensing.ObservationScales``), which the
+environments, the exported policies and the onboard runtime all use. Its layout version
+(``sensing.OBSERVATION_LAYOUT_VERSION``) is recorded in every exported policy. Version 1 files were
+ambiguous (this module once held a second table, 50 N·m / 0.3 m / 1 m, under the same name): a v1
+policy is accepted only when its recorded ``obs_scale`` is the C++ table (``check_policy_layout``).
+Force–torque noise (σ = 10 N per force, 2 N·m per torque, §4.2) is specified in physical units and
+converted through the table: σ_normalised = σ / scale.
 
 The action is exposed to the policy in [-1, 1]^3 and maps affinely to Vx ∈ [0, 0.2] m/s,
 ψ̇ ∈ ±20°/s, φ̇ ∈ ±10°/s (§4.2).
@@ -33,41 +37,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-LAYOUT_VERSION = "ernest-obs-v1"
+from .. import sensing as _sensing
+
 POLICY_RATE_HZ = 2.0  # f_pi, Table 5
 N_FTS = 4
 FTS_AXES = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
 FTS_START = 6
 N_ELEVATION = 12
-
-# Our assumed "maximum expected values" (see module docstring). Rationale: a 75 kg rover loads each
-# wheel with ~184 N on Earth; after subtraction of the four-sensor mean the differences stay within
-# ±200 N; torques at the wheel-assembly sensors have lever arms of ~0.2–0.3 m, hence ±50 N·m.
-FTS_FORCE_SCALE = 200.0  # N
-FTS_TORQUE_SCALE = 50.0  # N·m
 FTS_FORCE_SIGMA = 10.0  # N, §4.2
 FTS_TORQUE_SIGMA = 2.0  # N·m, §4.2
+#: The layout version of the C++ table; "ernest-obs-v1" files are checked against the table.
+LAYOUT_VERSION = f"ernest-obs-v{_sensing.OBSERVATION_LAYOUT_VERSION}"
+LEGACY_LAYOUT_VERSIONS = ("ernest-obs-v1",)
 
 ACTION_LOW = np.array([0.0, -math.radians(20.0), -math.radians(10.0)])  # Vx, psi_dot, phi_dot
 ACTION_HIGH = np.array([0.2, math.radians(20.0), math.radians(10.0)])
-
-
-def _paper_names() -> list[str]:
-    names = ["heading_deviation", "lateral_deviation", "roll", "pitch", "gimbal_yaw", "gimbal_roll"]
-    names += [f"fts{k}_{ax}" for k in range(N_FTS) for ax in FTS_AXES]
-    names += [f"elev{k}" for k in range(N_ELEVATION)]
-    names += ["action_vx", "action_yaw_rate", "action_roll_rate"]
-    return names
-
-
-def _paper_normalisation() -> tuple[np.ndarray, np.ndarray]:
-    scale = [math.pi, 1.0, math.radians(30.0), math.radians(30.0), math.radians(45.0),
-             math.radians(30.0)]
-    for _ in range(N_FTS):
-        scale += [FTS_FORCE_SCALE] * 3 + [FTS_TORQUE_SCALE] * 3
-    scale += [0.3] * N_ELEVATION  # m: obstacles up to ~0.3 m (Table 3 step heights)
-    scale += [1.0, 1.0, 1.0]  # the action is already normalised
-    return np.zeros(len(scale)), np.asarray(scale, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -163,11 +147,45 @@ class ObservationLayout:
                                  for a, b, s, st in d.get("noise_groups", [])])
 
 
+def ernest_layout(scales=None) -> ObservationLayout:
+    """The 45-value ERNEST layout: names and normalisation from the C++ table
+    (``sensing.ObservationScales``, or ``scales`` if given, e.g. an env's ``options.scales``), the
+    §4.2 action ranges and the paper's FTS noise."""
+    sc = _sensing.ObservationScales() if scales is None else scales
+    return ObservationLayout(LAYOUT_VERSION, list(_sensing.observation_names()),
+                             np.zeros(_sensing.OBSERVATION_SIZE), np.asarray(sc.divisors()),
+                             ACTION_LOW.copy(), ACTION_HIGH.copy(), paper_noise_groups())
+
+
 def paper_layout() -> ObservationLayout:
-    """The 45-value ERNEST layout with our assumed normalisation and the paper's FTS noise."""
-    offset, scale = _paper_normalisation()
-    return ObservationLayout(LAYOUT_VERSION, _paper_names(), offset, scale, ACTION_LOW.copy(),
-                             ACTION_HIGH.copy(), paper_noise_groups())
+    """The ERNEST layout with the default C++ table (what the rover environments publish)."""
+    return ernest_layout()
+
+
+def check_policy_layout(meta: dict, path: str, scales=None) -> None:
+    """Refuse an exported policy whose observation table is not the one the environments and the
+    runtime use (``scales``, default the C++ table): names the file, the entry and both values.
+    ``layout_version`` must be the current one, or a legacy one with the same table."""
+    version = meta.get("layout_version")
+    if version != LAYOUT_VERSION and version not in LEGACY_LAYOUT_VERSIONS:
+        raise ValueError(f"{path}: layout_version {version!r}; this version reads "
+                         f"{LAYOUT_VERSION!r} (and {', '.join(LEGACY_LAYOUT_VERSIONS)})")
+    want = np.asarray((_sensing.ObservationScales() if scales is None else scales).divisors())
+    got = np.asarray(meta.get("obs_scale", []), dtype=np.float64)
+    if got.shape != want.shape:
+        raise ValueError(f"{path}: obs_scale has {got.size} values, the observation {want.size}")
+    bad = np.flatnonzero(~np.isclose(got, want, rtol=1e-6, atol=0.0))
+    if bad.size:
+        i = int(bad[0])
+        names = _sensing.observation_names()
+        raise ValueError(f"{path}: the policy was trained with another observation scale table "
+                         f"({version}): obs_scale[{i}] ({names[i]}) = {got[i]:g}, the environments "
+                         f"use {want[i]:g} (sensing.ObservationScales); {bad.size} entries differ. "
+                         f"Retrain, or export it again from a checkpoint made with this table.")
+    offset = np.asarray(meta.get("obs_offset", np.zeros(want.size)), dtype=np.float64)
+    if offset.shape != want.shape or np.any(offset != 0.0):
+        raise ValueError(f"{path}: obs_offset must be {want.size} zeros (the observation has no "
+                         f"offset)")
 
 
 def generic_layout(obs_dim: int, action_low, action_high, version: str = "generic-v1",

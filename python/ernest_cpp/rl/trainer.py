@@ -65,13 +65,21 @@ def ensure_registered(env_id: str) -> None:
     import importlib
     import importlib.util
 
-    if importlib.util.find_spec("ernest_cpp.envs") is not None:
+    have_rover_envs = importlib.util.find_spec("ernest_cpp.envs") is not None
+    if have_rover_envs:
         importlib.import_module("ernest_cpp.envs")  # the rover envs register on import (issue 5)
     if env_id not in gym.registry:
-        hint = (" The ERNEST rover environments (ernest/<Scenario>-v0) are provided by "
-                "ernest_cpp.envs, which is not available in this installation."
-                if env_id.startswith("ernest/") else "")
-        raise ValueError(f"environment {env_id!r} is not registered with Gymnasium.{hint}")
+        namespace = env_id.split("/", 1)[0] if "/" in env_id else None
+        if namespace is not None and not have_rover_envs and namespace == "ernest":
+            hint = (" The ERNEST rover environments (ernest/<Scenario>-v0) are provided by "
+                    "ernest_cpp.envs, which is not available in this installation.")
+        else:
+            # name the ids that do exist: those of the same namespace, else every ERNEST one
+            known = sorted(k for k in gym.registry if namespace and k.startswith(namespace + "/"))
+            known = known or sorted(k for k in gym.registry if k.startswith(("ernest/", "ernest-toy/")))
+            hint = f" Registered ids: {', '.join(known)}." if known else ""
+        raise ValueError(f"unknown environment id {env_id!r}: it is not registered with "
+                         f"Gymnasium.{hint}")
 
 
 def make_env(env_id: str, kwargs: dict | None = None):
