@@ -10,9 +10,6 @@
 #include "ernest/common/thread_pool.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 
-namespace ernest {
-}
-
 namespace ernest::dynamics {
 
 class BatchStepper {
