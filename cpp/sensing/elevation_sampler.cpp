@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "ernest/common/validation.hpp"
@@ -41,7 +43,13 @@ void ElevationSamplingOptions::validate() const {
   require_positive(o, "spacing", spacing);
   require_in_range(o, "points_per_wheel", points_per_wheel, 3, 3);
   require_positive(o, "search_step", search_step);
-  require_in_range(o, "search_range", search_range, search_step, 100.0);
+  require_in_range(o, "search_step", search_step, 1e-9, 100.0);
+  try {
+    require_in_range(o, "search_range", search_range, search_step, 100.0);
+  } catch (const std::invalid_argument& e) {  // a coupled bound: name the other field too
+    throw std::invalid_argument(std::string(e.what()) + " (the lower bound is search_step = " +
+                                std::to_string(search_step) + ")");
+  }
 }
 
 ElevationSampler::ElevationSampler(const ElevationSamplingOptions& options) : options_(options) {

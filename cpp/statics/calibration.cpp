@@ -99,7 +99,12 @@ struct PerFootFunctor {
 
 void CalibrationOptions::validate() const {
   require_positive("CalibrationOptions", "k_min", k_min);
-  require_in_range("CalibrationOptions", "k_max", k_max, std::nextafter(k_min, kInf), kInf);
+  try {
+    require_in_range("CalibrationOptions", "k_max", k_max, std::nextafter(k_min, kInf), kInf);
+  } catch (const std::invalid_argument& e) {  // a coupled bound: name the other field too
+    throw std::invalid_argument(std::string(e.what()) + " (k_max must exceed k_min = " +
+                                std::to_string(k_min) + ")");
+  }
   require_in_range("CalibrationOptions", "grid_points", grid_points, 3, 1e6);
   require_in_range("CalibrationOptions", "brent_bits", brent_bits, 8, 52);
   sag.validate();

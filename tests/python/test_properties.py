@@ -89,6 +89,20 @@ def test_random_field_values_pass_or_name_the_field(item, value):
     assert math.isfinite(value), f"{field} = {value} passed validate()"
 
 
+@pytest.mark.parametrize("cls, field, value", [
+    (SE.ElevationSamplingOptions, "search_step", 1e3),   # above search_range: was blamed on it
+    (SE.ElevationSamplingOptions, "search_step", 50.0),  # coupled: search_range < search_step
+    (ST.CalibrationOptions, "k_min", 1e12),              # coupled: k_max <= k_min
+])
+def test_a_coupled_bound_names_the_field_that_was_changed(cls, field, value):
+    # Found by a longer run of the property test above (session 7): the message named only the
+    # other field of the pair.
+    obj = cls()
+    setattr(obj, field, value)
+    with pytest.raises(ValueError, match=field):
+        obj.validate()
+
+
 # ---- sensing: the observation and the action maps -------------------------------------------------
 
 finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False)
