@@ -4,6 +4,7 @@
 
 #include "ernest/common/validation.hpp"
 #include "ernest/walker/stance_loads.hpp"
+#include "ernest/walker/stance_sag.hpp"
 
 namespace ernest::footfall {
 
@@ -23,24 +24,14 @@ SwingSag predict_swing_sag(const walker::WalkerModel& model, const Eigen::Isomet
   const int legs = model.legs();
   // CG of the swing stance: the wheel raised (walker::lift_legs, IK nearest the current angles).
   const Eigen::MatrixXd lifted = walker::lift_legs(model, body, q, {leg}, options.lift_height);
-  statics::SagProblem p;
-  p.feet = model.contact_points(body, q);
-  p.stiffness = Eigen::Matrix3Xd::Constant(3, legs, options.stiffness);
-  p.lift = Eigen::VectorXd::Zero(legs);
-  p.lift[leg] = std::numeric_limits<double>::infinity();  // eq 9: the swing foot never touches
-  p.cg = model.center_of_mass(body, lifted);
-  p.mass = model.params().total_mass();
-  p.gravity = Eigen::Vector3d(0.0, 0.0, -model.params().gravity);
-  p.chassis_position = body.translation();
-  p.chassis_rotation = body.linear();
-  p.body_points.resize(3, legs);
-  for (int k = 0; k < legs; ++k) p.body_points.col(k) = body * model.hip_mount(k).translation();
+  const statics::SagProblem p = walker::stance_sag_problem(
+      model, body, model.contact_points(body, q), lifted,
+      Eigen::Matrix3Xd::Constant(3, legs, options.stiffness), leg);
   const statics::SagResult r = statics::solve_sag(p, options.sag);
   SwingSag out;
   out.status = r.status;
   out.rigid_body = body;
-  out.sagged_body.linear() = r.chassis_rotation;
-  out.sagged_body.translation() = r.chassis_position;
+  out.sagged_body = walker::sagged_pose(r);
   out.hip_displacement = r.body_points.col(leg) - p.body_points.col(leg);
   out.hip_drop = (p.body_points.row(2) - r.body_points.row(2)).transpose();
   out.forces = r.forces;

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "ernest/common/validation.hpp"
+#include "ernest/walker/stance_sag.hpp"
 
 namespace ernest::walker_sim {
 
@@ -24,32 +25,15 @@ Eigen::VectorXd corner_heights(const walker::WalkerModel& model, const Eigen::Is
 statics::SagResult predict_sag(const walker::WalkerModel& model, const Eigen::Isometry3d& body,
                                const Eigen::MatrixXd& q, const Eigen::Matrix3Xd& feet, int lifted,
                                const SagScenarioOptions& o) {
-  const int legs = model.legs();
-  statics::SagProblem pb;
-  pb.feet = feet;
   const double kz = o.sim.contact_stiffness, kt = o.tangential_ratio * kz;
-  pb.stiffness = Eigen::Vector3d(kt, kt, kz).replicate(1, legs);
-  pb.lift = Eigen::VectorXd::Zero(legs);
-  if (lifted >= 0) pb.lift[lifted] = kInf;
-  pb.cg = model.center_of_mass(body, q);
-  pb.mass = model.params().total_mass();
-  pb.gravity = Eigen::Vector3d(0.0, 0.0, -model.params().gravity);
-  pb.chassis_position = body.translation();
-  pb.chassis_rotation = body.linear();
-  pb.body_points.resize(3, legs);
-  for (int k = 0; k < legs; ++k) pb.body_points.col(k) = body * model.hip_mount(k).translation();
-  statics::SagResult r = statics::solve_sag(pb);
+  const Eigen::Matrix3Xd stiffness = Eigen::Vector3d(kt, kt, kz).replicate(1, model.legs());
+  statics::SagResult r = statics::solve_sag(walker::stance_sag_problem(model, body, feet, q, stiffness, lifted));
   require(r.status == statics::SagStatus::Converged,
           std::string("run_sag_scenario: the sag model did not converge: ") + statics::to_string(r.status));
   return r;
 }
 
-Eigen::Isometry3d pose_of(const statics::SagResult& r) {
-  Eigen::Isometry3d b = Eigen::Isometry3d::Identity();
-  b.linear() = r.chassis_rotation;
-  b.translation() = r.chassis_position;
-  return b;
-}
+Eigen::Isometry3d pose_of(const statics::SagResult& r) { return walker::sagged_pose(r); }
 
 }  // namespace
 
