@@ -8,22 +8,13 @@
 #include <vector>
 
 #include "ernest/dynamics/rover_sim.hpp"
+#include "snapshot_gap.hpp"
 
 using namespace ernest::dynamics;
 
 namespace {
 
-double body_gap(const Snapshot& a, const Snapshot& b) {
-  double gap = 0.0;
-  for (int k = 0; k < 6; ++k) {
-    for (int d = 0; d < 3; ++d) {
-      gap = std::max(gap, std::abs(a.bodies[k].pos[d] - b.bodies[k].pos[d]));
-      gap = std::max(gap, std::abs(a.bodies[k].lin[d] - b.bodies[k].lin[d]));
-      gap = std::max(gap, std::abs(a.bodies[k].ang[d] - b.bodies[k].ang[d]) * 0.17);
-    }
-  }
-  return gap;  // [m] or [m/s] at the tyre
-}
+using ernest::testing::body_gap;
 
 SimOptions options(bool guess) {
   SimOptions o;

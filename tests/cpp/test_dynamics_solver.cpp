@@ -13,6 +13,7 @@
 
 #include "ernest/dynamics/ode_lcp.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
+#include "snapshot_gap.hpp"
 #include "ernest/dynamics/sparse_ldlt.hpp"
 
 using namespace ernest::dynamics;
@@ -147,17 +148,7 @@ TEST(SparseLdlt, RefusesAMatrixThatIsNotPositiveDefinite) {
 
 namespace {
 
-double body_gap(const Snapshot& a, const Snapshot& b) {
-  double gap = 0.0;
-  for (int k = 0; k < 6; ++k) {
-    for (int d = 0; d < 3; ++d) {
-      gap = std::max(gap, std::abs(a.bodies[k].pos[d] - b.bodies[k].pos[d]));
-      gap = std::max(gap, std::abs(a.bodies[k].lin[d] - b.bodies[k].lin[d]));
-      gap = std::max(gap, std::abs(a.bodies[k].ang[d] - b.bodies[k].ang[d]) * 0.17);
-    }
-  }
-  return gap;  // [m] or [m/s] at the tyre
-}
+using ernest::testing::body_gap;
 
 Commands varied(int k, double base, double yaw = 0.2) {
   Commands c;
