@@ -6,7 +6,9 @@ sagged pose (§3.4.1), the Dijkstra–bisection smoothing (§3.4.2, PNG), then a
 planted feet; the legs step in the reverse-wave order of the gait planner (§5.3.1). Then the gait
 planner's skeleton gait on flat ground and, in the ODE walker simulator, the Moses Lake lesson
 (§4.1): a swing planned against the rigid pose hits a rock, one planned against the sag model's
-pose clears it (``footfall_gait``). Writes footfall.json and footfall_report.md."""
+pose clears it (``footfall_gait``); and self-imaging, the raised leg removed from the hazard
+camera's depth map by watershed (§4.3, §5.2; ``perception_selfimage``). Writes footfall.json and
+footfall_report.md."""
 
 from __future__ import annotations
 
@@ -18,10 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import dynamics as D
 from . import footfall as F
 from . import walker as W
-
 
 
 def _stance_q(model, terrain, body, feet, q, mo):
