@@ -24,7 +24,8 @@ from ernest_cpp.rl.export import (HASH_KEY, METADATA_FILE, ExportError, _quiet_j
                                   load_policy, metadata, weights_sha256)
 from ernest_cpp.rl.networks import Actor
 from ernest_cpp.rl.storage import CorruptFileError, clean_stale
-from ernest_cpp.rl.trainer import Trainer, load_checkpoint
+from ernest_cpp.rl.checkpoints import load_checkpoint
+from ernest_cpp.rl.trainer import Trainer
 from test_runtime import run_runtime
 
 LAYOUT = ErnestEnv("flat").observation_layout

@@ -25,7 +25,8 @@ from ernest_cpp.rl import config as C  # noqa: E402
 from ernest_cpp.rl.consolidate import consolidate_runs  # noqa: E402
 from ernest_cpp.rl.ray_trainer import RayTrainer  # noqa: E402
 from ernest_cpp.rl.toy_envs import PointMassEnv, optimal_return  # noqa: E402
-from ernest_cpp.rl.trainer import Trainer, load_checkpoint  # noqa: E402
+from ernest_cpp.rl.checkpoints import load_checkpoint  # noqa: E402
+from ernest_cpp.rl.trainer import Trainer  # noqa: E402
 
 
 @pytest.fixture(scope="module")

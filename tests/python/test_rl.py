@@ -25,7 +25,9 @@ from ernest_cpp.rl.replay import ReplayBuffer  # noqa: E402
 from ernest_cpp.rl.storage import CorruptFileError  # noqa: E402
 from ernest_cpp.rl.td3 import TD3, TD3Config  # noqa: E402
 from ernest_cpp.rl.toy_envs import PointMassEnv, optimal_return  # noqa: E402
-from ernest_cpp.rl.trainer import Trainer, load_checkpoint, scenario_env_id  # noqa: E402
+from ernest_cpp.rl.checkpoints import load_checkpoint  # noqa: E402
+from ernest_cpp.rl.envs_util import scenario_env_id  # noqa: E402
+from ernest_cpp.rl.trainer import Trainer  # noqa: E402
 
 POINT_MASS = "ernest-toy/PointMass-v0"
 

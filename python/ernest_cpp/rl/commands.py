@@ -45,7 +45,8 @@ def _build(args, extra: dict | None = None) -> dict:
 
 def _train(args) -> int:
     _passive_openmp()
-    from .trainer import Trainer, resolve_env_id
+    from .envs_util import resolve_env_id
+    from .trainer import Trainer
 
     extra: dict = {}
     if args.env:
@@ -67,7 +68,7 @@ def _train(args) -> int:
     if args.resume:
         # The run's saved settings, changed only by what this command line gives explicitly.
         from .config import merge, parse_assignment
-        from .trainer import load_checkpoint
+        from .checkpoints import load_checkpoint
 
         if not args.run_dir:
             raise ValueError("--resume needs --run-dir")
@@ -135,7 +136,7 @@ def _export(args) -> int:
     _passive_openmp()
     from . import layout as L
     from .export import export_actor
-    from .trainer import agent_from_checkpoint, load_checkpoint
+    from .checkpoints import agent_from_checkpoint, load_checkpoint
 
     ck = load_checkpoint(args.checkpoint, with_buffer=False)
     agent = agent_from_checkpoint(ck)

@@ -22,8 +22,8 @@ from . import layout as L
 from .replay import ReplayBuffer
 from .storage import AtomicDir
 from .td3 import TD3, TD3Config
-from .trainer import (agent_from_checkpoint, evaluate, find_checkpoint, load_checkpoint, make_env,
-                      noise_for)
+from .checkpoints import agent_from_checkpoint, find_checkpoint, load_checkpoint
+from .envs_util import evaluate, make_env, noise_for
 
 
 def pool_buffers(sources: list, per_run: int, capacity: int | None = None) -> ReplayBuffer:

@@ -69,7 +69,7 @@ class RolloutWorker:
 
         from .exploration import make_exploration
         from .networks import Actor
-        from .trainer import autoreset_mode, check_spaces, make_vector_env
+        from .envs_util import autoreset_mode, check_spaces, make_vector_env
 
         torch.set_num_threads(1)  # one core per worker (the actor requests num_cpus=1)
         self.vec = make_vector_env(env_id, num_envs, env_cfg.get("vector", "auto"),
@@ -122,7 +122,7 @@ class RolloutWorker:
         and exploration; the valid transitions and finished episodes as numpy arrays."""
         import torch
 
-        from .trainer import step_transitions, to_env_action
+        from .envs_util import step_transitions, to_env_action
 
         t = time.perf_counter()
         if weights is not None:
@@ -168,7 +168,7 @@ class RayVectorEnv:
 
     def __init__(self, env_id: str, num_workers: int, envs_per_worker: int, env_cfg: dict,
                  td3: dict, exploration: dict, obs_space, act_space):
-        from .trainer import check_spaces
+        from .envs_util import check_spaces
 
         self.ray = import_ray()
         self.num_workers, self.m = int(num_workers), int(envs_per_worker)

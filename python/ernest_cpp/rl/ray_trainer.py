@@ -25,7 +25,8 @@ import time
 import numpy as np
 
 from .ray_backend import RayVectorEnv, connect, weights_to_numpy
-from .trainer import Trainer, make_env, resolve_env_id
+from .envs_util import make_env, resolve_env_id
+from .trainer import Trainer
 
 MODES = ("sync", "async")
 IN_FLIGHT = 2  # async: collection calls queued per worker, so it never waits for the learner
