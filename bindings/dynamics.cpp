@@ -410,7 +410,8 @@ void bind_dynamics(py::module_& m) {
   m.def("fast_lcp_active", &fast_lcp_active,
         "Whether ODE's constraint solves reach ernest's sparse solver in this process (the "
         "symbol-binding hook of cpp/dynamics/ode_lcp.cpp works and answers a probe step as ODE "
-        "does). False: every solve is ODE's Dantzig solver (same physics, slower). Initialises "
+        "does). False: every solve is ODE's Dantzig solver (slower; friction by ODE's "
+        "approximation, not corrected to the final normal force). Initialises "
         "ODE; probes once per process.");
   m.def("fast_lcp_inactive_reason", &fast_lcp_inactive_reason,
         "Why fast_lcp_active() is False; '' when it is True.");

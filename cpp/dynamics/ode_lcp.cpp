@@ -593,12 +593,13 @@ const std::string& probe_verdict() {
         why = "the sparse solver's answer to a probe step differs from ODE's (this libode's "
               "data layout is not ODE 0.16's)";
     }
-    // Once per process: the physics is the same, only slower, so a warning, not an error.
+    // Once per process: a warning, not an error (the simulation still runs, on ODE's solver).
     if (!why.empty())
       std::fprintf(stderr,
                    "ernest: warning: the fast constraint solver is off: %s; every step uses "
-                   "ODE's Dantzig solver (same physics, slower). See ARCHITECTURE.md, \"The "
-                   "solver hook\".\n",
+                   "ODE's Dantzig solver: slower, and friction bounded by ODE's approximation "
+                   "(not corrected to Coulomb's law with the final normal force). See "
+                   "ARCHITECTURE.md, \"The solver hook\".\n",
                    why.c_str());
     return why;
   }();

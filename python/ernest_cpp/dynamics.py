@@ -121,7 +121,8 @@ def fast_lcp_active() -> bool:
 
     The fast path replaces ODE's internal ``dxSolveLCP`` by symbol binding (ARCHITECTURE.md, "The
     solver hook"); with a libode that binds the call internally, names it otherwise or lays out
-    its data differently, every solve is ODE's Dantzig solver instead: the same physics, slower.
+    its data differently, every solve is ODE's Dantzig solver instead: slower, and friction
+    bounded by ODE's approximation (not corrected to Coulomb's law with the final normal force).
     The first time it is found off, this issues one ``RuntimeWarning`` naming why (the C++ core
     also prints one line on stderr). Checked once, on import of this module; per simulator, see
     ``RoverSim.solver_stats().fast_lcp``.
@@ -131,7 +132,7 @@ def fast_lcp_active() -> bool:
     if not active and not _fast_lcp_warned:
         _fast_lcp_warned = True
         warnings.warn(f"ernest_cpp: the fast constraint solver is off ({_dyn.fast_lcp_inactive_reason()}); "
-                      "every step uses ODE's Dantzig solver (same physics, slower)",
+                      "every step uses ODE's Dantzig solver: slower, friction by ODE's approximation",
                       RuntimeWarning, stacklevel=2)
     return active
 
