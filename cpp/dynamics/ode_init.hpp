@@ -12,7 +12,8 @@ namespace ernest::dynamics {
 /// this process. The hook works by symbol binding (ARCHITECTURE.md, "The solver hook"): if this
 /// libode binds its call internally, names it differently or lays out its data otherwise, every
 /// solve goes to ODE's own Dantzig solver instead (slower, and friction bounded by ODE's
-/// approximation: no Coulomb correction), and the first call prints one warning on stderr. Initialises ODE; probes once (two steps of a tiny world).
+/// approximation: no Coulomb correction), and the first call prints one warning on stderr.
+/// Initialises ODE; probes once (two steps of a tiny world).
 bool fast_lcp_active();
 
 /// Why the fast path is off, for messages; empty while fast_lcp_active().

@@ -125,14 +125,15 @@ def fast_lcp_active() -> bool:
     bounded by ODE's approximation (not corrected to Coulomb's law with the final normal force).
     The first time it is found off, this issues one ``RuntimeWarning`` naming why (the C++ core
     also prints one line on stderr). Checked once, on import of this module; per simulator, see
-    ``RoverSim.solver_stats().fast_lcp``.
+    ``RoverSim.solver_stats.fast_lcp``.
     """
     global _fast_lcp_warned
     active = bool(_dyn.fast_lcp_active())
     if not active and not _fast_lcp_warned:
         _fast_lcp_warned = True
-        warnings.warn(f"ernest_cpp: the fast constraint solver is off ({_dyn.fast_lcp_inactive_reason()}); "
-                      "every step uses ODE's Dantzig solver: slower, friction by ODE's approximation",
+        why = _dyn.fast_lcp_inactive_reason()
+        warnings.warn(f"ernest_cpp: the fast constraint solver is off ({why}); every step uses "
+                      "ODE's Dantzig solver: slower, friction by ODE's approximation",
                       RuntimeWarning, stacklevel=2)
     return active
 
