@@ -87,6 +87,8 @@ void init_ode_once() {
   }
 }
 
+std::uint64_t ode_lcp_message_count() { return ode_lcp_messages; }
+
 OdeCallScope::OdeCallScope() { ++own_calls; }
 OdeCallScope::~OdeCallScope() { --own_calls; }
 

@@ -37,6 +37,9 @@ class OdeInternalError : public std::runtime_error {
 /// Messages about the LCP that ODE sent on this thread inside an OdeCallScope (counted, not
 /// printed: SolverStats::lcp_errors).
 extern thread_local std::uint64_t ode_lcp_messages;
+/// ode_lcp_messages, read through a call: an executable reading another library's extern
+/// thread_local directly trips UBSan's null check after the linker relaxes the TLS access.
+std::uint64_t ode_lcp_message_count();
 
 /// Marks this thread as inside one of ernest's own ODE calls (a RoverSim or WalkerSim step):
 /// ODE's errors then throw OdeInternalError and its LCP messages are counted. Outside, every
