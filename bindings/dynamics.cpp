@@ -7,6 +7,7 @@
 #include "bindings.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/dynamics/batch_stepper.hpp"
+#include "ernest/dynamics/ode_init.hpp"
 #include "ernest/dynamics/rover_parameters.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/dynamics/terrain.hpp"
@@ -286,6 +287,9 @@ void bind_dynamics(py::module_& m) {
                     "steps (substeps) with an obstacle contact solved with its friction bounds")
       .def_readonly("obstacles_touched", &SolverStats::obstacles_touched,
                     "distinct obstacles in contact at the start of the last step")
+      .def_readonly("fast_lcp", &SolverStats::fast_lcp,
+                    "solves can take the sparse path: SimOptions.sparse_lcp and the solver hook "
+                    "works in this process (fast_lcp_active()); False: all are ODE's")
       .def("__repr__", [](const SolverStats& s) {
         return "SolverStats(steps=" + std::to_string(s.steps) + ", first_guess=" +
                std::to_string(s.first_guess) + ", later_guess=" + std::to_string(s.later_guess) +
@@ -295,7 +299,8 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.dense_solves) + ", slip_solves=" +
                std::to_string(s.slip_solves) + ", obstacle_guessed=" +
                std::to_string(s.obstacle_guessed) + ", obstacle_bounded=" +
-               std::to_string(s.obstacle_bounded) + ")";
+               std::to_string(s.obstacle_bounded) + ", fast_lcp=" +
+               (s.fast_lcp ? "True" : "False") + ")";
       });
 
   py::class_<Snapshot>(m, "Snapshot", "Complete simulation state for RoverSim.restore().")
@@ -400,6 +405,16 @@ void bind_dynamics(py::module_& m) {
         "wy"_a, "psi_dot"_a, "phi_dot"_a,
         "Wheel synchroniser of §2.3: wheel speeds (eq 10) from (Vx, wx, wy, psi_dot, phi_dot) "
         "at gimbal angles (psi, phi), with x = A^+ y (eq 9).");
+  // The solver hook (ARCHITECTURE.md, "The solver hook"); ernest_cpp.dynamics wraps these and
+  // turns an inactive hook into one RuntimeWarning.
+  m.def("fast_lcp_active", &fast_lcp_active,
+        "Whether ODE's constraint solves reach ernest's sparse solver in this process (the "
+        "symbol-binding hook of cpp/dynamics/ode_lcp.cpp works and answers a probe step as ODE "
+        "does). False: every solve is ODE's Dantzig solver (slower; friction by ODE's "
+        "approximation, not corrected to the final normal force). Initialises "
+        "ODE; probes once per process.");
+  m.def("fast_lcp_inactive_reason", &fast_lcp_inactive_reason,
+        "Why fast_lcp_active() is False; '' when it is True.");
 }
 
 }  // namespace ernest::bindings

@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -563,8 +564,11 @@ std::array<double, 6> probe_step(bool sparse, LcpWorkspace& ws) {
 
 }  // namespace
 
-bool sparse_lcp_active() {
-  static const bool active = [] {
+namespace {
+
+// The probe's verdict: "" when the sparse path is active, else why not (for the warning).
+const std::string& probe_verdict() {
+  static const std::string verdict = [] {
     // ODE's calls reach the hook, ODE's own solver is there to fall back on, and on a probe
     // step the sparse path answers as ODE's solver does (a check that ODE's data layout is the
     // one solve_sparse() reads). Otherwise every solve goes to ODE.
@@ -575,15 +579,38 @@ bool sparse_lcp_active() {
     const bool hooked = reached;
     const std::array<double, 6> ours = probe_step(true, *ws);
     probing = false;
-    if (!hooked) return false;
-    if (ode_solver() == nullptr)  // ODE would get no solver at all: refuse to run
-      throw std::runtime_error("ODE's dxSolveLCP (" + std::string(kSymbol) + ") not found");
-    bool same = ws->sparse == 1 && ws->dense == 1;
-    for (int k = 0; k < 6; ++k) same = same && std::abs(ours[k] - ode[k]) <= 1e-12 * (1.0 + std::abs(ode[k]));
-    return same;
+    std::string why;
+    if (!hooked) {
+      why = "ODE's constraint solves do not reach ernest's dxSolveLCP (this libode binds its "
+            "call internally, or names it otherwise than " + std::string(kSymbol) + ")";
+    } else {
+      if (ode_solver() == nullptr)  // ODE would get no solver at all: refuse to run
+        throw std::runtime_error("ODE's dxSolveLCP (" + std::string(kSymbol) + ") not found");
+      bool same = ws->sparse == 1 && ws->dense == 1;
+      for (int k = 0; k < 6; ++k)
+        same = same && std::abs(ours[k] - ode[k]) <= 1e-12 * (1.0 + std::abs(ode[k]));
+      if (!same)
+        why = "the sparse solver's answer to a probe step differs from ODE's (this libode's "
+              "data layout is not ODE 0.16's)";
+    }
+    // Once per process: a warning, not an error (the simulation still runs, on ODE's solver).
+    if (!why.empty())
+      std::fprintf(stderr,
+                   "ernest: warning: the fast constraint solver is off: %s; every step uses "
+                   "ODE's Dantzig solver: slower, and friction bounded by ODE's approximation "
+                   "(not corrected to Coulomb's law with the final normal force). See "
+                   "ARCHITECTURE.md, \"The solver hook\".\n",
+                   why.c_str());
+    return why;
   }();
-  return active;
+  return verdict;
 }
+
+}  // namespace
+
+bool sparse_lcp_active() { return probe_verdict().empty(); }
+
+const std::string& sparse_lcp_inactive_reason() { return probe_verdict(); }
 
 }  // namespace ernest::dynamics::detail
 

@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "ernest/dynamics/sparse_ldlt.hpp"
@@ -94,8 +95,11 @@ class LcpScope {
 
 /// Whether ODE's calls reach ode_lcp.cpp's solver in this process (the symbol interposition
 /// worked) and it answers a probe step as ODE's own solver does; if not, every solve goes to
-/// ODE. Steps a tiny world twice, once, on first use; throws std::runtime_error if ODE's calls
-/// reach the hook but ODE's own solver cannot be found.
+/// ODE, and the probe prints one warning on stderr. Steps a tiny world twice, once, on first use
+/// (ODE must be initialised: init_ode_once); throws std::runtime_error if ODE's calls reach the
+/// hook but ODE's own solver cannot be found. Public face: fast_lcp_active() (ode_init.hpp).
 bool sparse_lcp_active();
+/// Why sparse_lcp_active() is false ("" when it is true).
+const std::string& sparse_lcp_inactive_reason();
 
 }  // namespace ernest::dynamics::detail

@@ -20,36 +20,7 @@ namespace ernest::dynamics {
 
 namespace detail {
 
-thread_local std::uint64_t ode_lcp_messages = 0;
-
 const char* const kBodyNames[6] = {"chassis", "bogie", "wheel FL", "wheel FR", "wheel RL", "wheel RR"};
-
-void init_ode_once() {
-  static std::once_flag flag;
-  std::call_once(flag, [] {
-    dInitODE2(0);
-    // ODE reports LCP trouble through its message handler (on stderr by default). The step
-    // counts it per thread (SolverStats::lcp_errors); the divergence check is our error channel.
-    dSetMessageHandler([](int num, const char*, va_list) {
-      if (num == d_ERR_LCP) ++ode_lcp_messages;
-    });
-    // ODE's error and debug handlers must not return (ODE aborts if they do): throw instead,
-    // through ODE's C++ frames (built with unwind tables), to RoverSim::Impl::run_ode().
-    const auto raise = [](int num, const char* msg, va_list ap) {
-      char text[512];
-      std::vsnprintf(text, sizeof text, msg, ap);
-      throw OdeInternalError("ODE error " + std::to_string(num) + ": " + text);
-    };
-    dSetErrorHandler(raise);
-    dSetDebugHandler(raise);
-  });
-  // Every thread that steps a world needs ODE's per-thread data (collision caches).
-  thread_local bool allocated = false;
-  if (!allocated) {
-    dAllocateODEDataForThread(dAllocateMaskAll);
-    allocated = true;
-  }
-}
 
 void to_ode_rot(const Mat3& m, dMatrix3 r) {
   for (int i = 0; i < 3; ++i) {
@@ -224,7 +195,8 @@ RoverSim::Impl::~Impl() {
 
 void RoverSim::Impl::build() {
   init_ode_once();
-  detail::sparse_lcp_active();  // find ODE's own solver now: throws here, not inside a step
+  // find ODE's own solver now (throws here, not inside a step); warns once if the hook is off
+  stats.fast_lcp = opt.sparse_lcp && detail::sparse_lcp_active();
   lcp.enabled = opt.sparse_lcp;
   world = dWorldCreate();
   // ODE's default step threading implementation is one object shared by every world and is not

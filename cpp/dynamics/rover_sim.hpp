@@ -187,6 +187,10 @@ struct SolverStats {
   std::uint64_t obstacle_bounded = 0;
   /// Distinct obstacles in contact with the rover at the start of the last step (not a count).
   int obstacles_touched = 0;
+  /// Solves can take the sparse path: SimOptions::sparse_lcp and the solver hook works in this
+  /// process (fast_lcp_active(), ode_init.hpp). False: every solve is ODE's, friction
+  /// bounded by its approximation (no solve_coulomb).
+  bool fast_lcp = false;
 };
 
 /// Complete simulation state; restore() reproduces the run bit for bit.

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "ernest/dynamics/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
 #include "ernest/dynamics/ode_lcp.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/soil/bekker_wong.hpp"
@@ -41,16 +42,6 @@ inline Mat3 to_mat(const dReal* r) {  // ODE stores 3x4 row-major
   return m;
 }
 
-void init_ode_once();
-/// Thrown by the error and debug handlers that init_ode_once() installs: ODE's default handlers
-/// abort the process on an internal error (e.g. "!bSafeNormalize4Fault" on a non-finite state).
-/// RoverSim::Impl::run_ode() turns it into SimulationDiverged and retires the simulator.
-class OdeInternalError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-/// Messages about the LCP that ODE sent on this thread (its message handler counts them).
-extern thread_local std::uint64_t ode_lcp_messages;
 void canonicalise_quaternion(dBodyID b);
 
 struct DeepestPoint {
@@ -185,6 +176,7 @@ struct RoverSim::Impl {
       throw SimulationDiverged("RoverSim: ODE failed internally earlier (" + ode_failure +
                                "); this simulator cannot be used again, create a new RoverSim");
     try {
+      const detail::OdeCallScope own;  // ODE's errors in here throw (ode_init.hpp)
       f();
     } catch (const detail::OdeInternalError& e) {
       ode_failure = e.what();

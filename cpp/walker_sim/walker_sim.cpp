@@ -12,7 +12,7 @@
 #include <string>
 
 #include "ernest/common/validation.hpp"
-#include "ernest/dynamics/rover_sim_impl.hpp"  // init_ode_once, OdeInternalError
+#include "ernest/dynamics/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
 
 namespace ernest::walker_sim {
 
@@ -258,6 +258,7 @@ struct WalkerSim::Impl {
       }
     }
     try {
+      const dynamics::detail::OdeCallScope own;  // ODE's errors in here throw
       dWorldStep(world, o.dt);
     } catch (const dynamics::detail::OdeInternalError& e) {
       broken = true;

@@ -10,11 +10,13 @@ conveniences for building scenarios.
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Iterable, Sequence
 
 import numpy as np
 
 from . import soil as _soil
+from ._core import dynamics as _dyn
 from ._core.dynamics import (  # noqa: F401  (re-exports)
     COMMAND_SIZE,
     OBSERVATION_SIZE,
@@ -111,6 +113,31 @@ def sync_commands(sim: RoverSim, vx: float, yaw_rate: float = 0.0, roll_rate: fl
     return c
 
 
+_fast_lcp_warned = False
+
+
+def fast_lcp_active() -> bool:
+    """Whether ODE's constraint solves reach ernest's sparse solver in this process.
+
+    The fast path replaces ODE's internal ``dxSolveLCP`` by symbol binding (ARCHITECTURE.md, "The
+    solver hook"); with a libode that binds the call internally, names it otherwise or lays out
+    its data differently, every solve is ODE's Dantzig solver instead: slower, and friction
+    bounded by ODE's approximation (not corrected to Coulomb's law with the final normal force).
+    The first time it is found off, this issues one ``RuntimeWarning`` naming why (the C++ core
+    also prints one line on stderr). Checked once, on import of this module; per simulator, see
+    ``RoverSim.solver_stats.fast_lcp``.
+    """
+    global _fast_lcp_warned
+    active = bool(_dyn.fast_lcp_active())
+    if not active and not _fast_lcp_warned:
+        _fast_lcp_warned = True
+        why = _dyn.fast_lcp_inactive_reason()
+        warnings.warn(f"ernest_cpp: the fast constraint solver is off ({why}); every step uses "
+                      "ODE's Dantzig solver: slower, friction by ODE's approximation",
+                      RuntimeWarning, stacklevel=2)
+    return active
+
+
 def command_array(rows: Sequence[Sequence[float]]) -> np.ndarray:
     """(N, COMMAND_SIZE) float64 array for BatchStepper.step, checked."""
     a = np.ascontiguousarray(rows, dtype=np.float64)
@@ -124,6 +151,8 @@ __all__ = [
     "ActuatorMode", "BatchStepper", "BoxObstacle", "ClutchState", "Commands", "GroundType",
     "HeightMap", "MotorElectrical", "MotorParameters", "RoverParameters", "RoverSim", "RoverState",
     "SimOptions", "SimulationDiverged", "Snapshot", "SolverStats", "WheelSyncResult", "command_array",
-    "make_options", "make_sim", "motor_electrical", "rock_field", "sync_commands",
+    "fast_lcp_active", "make_options", "make_sim", "motor_electrical", "rock_field", "sync_commands",
     "synchronise_wheels", "wheel_jacobian",
 ]
+
+fast_lcp_active()  # warn on import if the hook is off (once per process)

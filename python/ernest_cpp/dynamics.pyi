@@ -143,6 +143,7 @@ class SolverStats:
     obstacle_guessed: int
     obstacle_bounded: int
     obstacles_touched: int
+    fast_lcp: bool
 
 class Commands:
     wheel_speed: list[float]
@@ -262,3 +263,4 @@ def make_sim(ground: str = "soil", terrain: HeightMap | None = None,
 def sync_commands(sim: RoverSim, vx: float, yaw_rate: float = 0.0, roll_rate: float = 0.0,
                   gimbal_enabled: bool = True, clutch_engage: bool = False) -> Commands: ...
 def command_array(rows: Sequence[Sequence[float]]) -> npt.NDArray[np.float64]: ...
+def fast_lcp_active() -> bool: ...
