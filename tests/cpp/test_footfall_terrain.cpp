@@ -12,6 +12,7 @@
 #include "ernest/footfall/step_planner.hpp"
 #include "ernest/footfall/terrain_map.hpp"
 #include "ernest/perception/elevation_map.hpp"
+#include "ernest/walker/stance_loads.hpp"
 #include "test_util.hpp"
 
 using namespace ernest::footfall;
@@ -197,4 +198,19 @@ TEST(FootfallTerrain, NanPosesThrowAndPlanningKeepsItsBudget) {
     EXPECT_LT(r.seconds, po.time_limit + 0.5) << "query " << k;  // the budget plus set-up, not a hang
     if (r.status == PlanStatus::kNoPlan) EXPECT_EQ(r.reason, "no path found within the time limit");
   }
+}
+
+// The terrain is solid: a leg entirely below the surface collides (FCL's triangle mesh alone is
+// a surface and would find nothing to touch), and the same leg above it is free.
+TEST(FootfallTerrain, TheTerrainIsSolid) {
+  const walker::WalkerModel model(walker::sdm_b_parameters());
+  const Eigen::Isometry3d body = model.standard_body_pose();
+  const Eigen::MatrixXd q = model.standard_configuration();
+  const Eigen::VectorXd up = walker::lift_legs(model, body, q, {0}, 0.3).col(0);
+  CollisionOptions o;
+  o.environment_clearance = 0.0;
+  LegCollisionChecker below(model, HeightMap::flat(12, 12, 0.05, 3.0, -6, -6), body, q, 0, o);
+  EXPECT_FALSE(below.valid(up));
+  LegCollisionChecker above(model, HeightMap::flat(12, 12, 0.05, -0.5, -6, -6), body, q, 0, o);
+  EXPECT_TRUE(above.valid(up));
 }
