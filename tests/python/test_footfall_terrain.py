@@ -69,3 +69,13 @@ def test_plan_on_the_stereo_map_is_collision_free_on_the_ground_truth():
     seen = [(t.terrain.height(a, b), truth.height(a, b)) for a, b in w[:2].T if not t.unknown_at(a, b)]
     below = [s - g for s, g in seen if s < g - 0.03]
     assert len(seen) > 10 and not below, below
+
+
+def test_cli_terrain_option():
+    from ernest_cpp import cli
+
+    parser, _ = cli.build_parser()
+    assert parser.parse_args(["footfall"]).terrain == "truth"
+    assert parser.parse_args(["footfall", "--terrain", "stereo"]).terrain == "stereo"
+    with pytest.raises(SystemExit):
+        parser.parse_args(["footfall", "--terrain", "lidar"])
