@@ -66,9 +66,9 @@ def run(out: Path, steps: int = 6, stride: float = 0.4, seed: int = 3, cell: flo
     ro = F.RockFieldOptions()
     ro.rocks, ro.seed, ro.length, ro.centre_x, ro.keep_clear, ro.inner_radius = rocks, seed, 10.0, 1.0, 0.45, 1.4
     ro.max_height = 0.5
-    terrain = F.rock_field(ro, keep)
-    # the planner's DEM: the simulator's ground truth, or stereo -> fused map (footfall_terrain)
-    terrain = footfall_terrain.planner_terrain(terrain_source, terrain, body)
+    truth = F.rock_field(ro, keep)  # the simulator's terrain
+    # the planner's DEM: the ground truth, or stereo -> fused map (footfall_terrain)
+    terrain = footfall_terrain.planner_terrain(terrain_source, truth, body)
     mo = F.StabilityMapOptions()
     mo.cell = cell
     mo.min_margin = MIN_MARGIN
