@@ -7,6 +7,8 @@
 //    PathSimplifier::simplifyMax on the same plans (length, time),
 //  * a dense re-check (1e-3 rad, zero clearance) of every returned path.
 // Medians; `./run bench footfall` (then benchmarks/bench_footfall.py, the Python-side timings).
+// Arguments: [queries (60)] [SBL range, rad (PlannerOptions' default)]; FOOTFALL_VERBOSE=1 prints
+// every hard query (wall and CPU times, nodes, rounds, checks), FOOTFALL_ONLY=k runs query k only.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
