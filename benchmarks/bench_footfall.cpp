@@ -7,9 +7,13 @@
 //    PathSimplifier::simplifyMax on the same plans (length, time),
 //  * a dense re-check (1e-3 rad, zero clearance) of every returned path.
 // Medians; `./run bench footfall` (then benchmarks/bench_footfall.py, the Python-side timings).
+// Arguments: [queries (60)] [SBL range, rad (PlannerOptions' default)]; FOOTFALL_VERBOSE=1 prints
+// every hard query (wall and CPU times, nodes, rounds, checks), FOOTFALL_ONLY=k runs query k only.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <vector>
 
 #include "bench_util.hpp"
@@ -28,6 +32,14 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double max_of(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
+// CPU time of this thread [s]: on the shared, loaded machine the wall figures include the time
+// other processes hold the core; the CPU time is what the planner itself costs.
+double cpu_now() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -71,32 +83,47 @@ int main(int argc, char** argv) {
   PlannerOptions po;
   po.time_limit = 1.0;
   if (argc > 2) po.range = std::atof(argv[2]);
-  std::vector<double> h_sbl, h_rrt, h_ours, h_ratio, c_sbl, c_rrt, t_sbl, t_rrt, t_ours, t_ompl, l_raw, r_ours, r_ompl;
+  std::vector<double> h_sbl, h_rrt, h_ours, h_ratio, hc_sbl, hc_ours, h_len, c_sbl, c_rrt, t_sbl, t_rrt, t_ours, t_ompl, l_raw, l_smooth, r_ours, r_ompl;
   int ok_sbl = 0, ok_rrt = 0, shorter = 0, dirty = 0, straight = 0;
+  const int only = std::getenv("FOOTFALL_ONLY") ? std::atoi(std::getenv("FOOTFALL_ONLY")) : -1;
   for (int k = 0; k < queries; ++k) {
+    if (only >= 0 && k != only) continue;
     const bool free_edge = checker.motion_valid(ends.col(2 * k), ends.col(2 * k + 1), po.epsilon);
     straight += free_edge;
     po.seed = 100 + k;
     po.planner = PlannerType::kSbl;
     LegPlanner sbl(checker, po);
+    const double c0 = cpu_now();
     const PlanResult r = sbl.plan(ends.col(2 * k), ends.col(2 * k + 1));
+    const double cpu_sbl = cpu_now() - c0;
     po.planner = PlannerType::kRrtConnect;
-    LegPlanner rrt(checker, po);
+    PlannerOptions ro = po;
+    ro.range = 0.0;  // the reference at OMPL's default range
+    LegPlanner rrt(checker, ro);
     const PlanResult c = rrt.plan(ends.col(2 * k), ends.col(2 * k + 1));
     if (c.status == PlanStatus::kSolved) ++ok_rrt, t_rrt.push_back(c.seconds), c_rrt.push_back(double(c.checks));
     if (r.status != PlanStatus::kSolved) continue;
     ++ok_sbl;
     t_sbl.push_back(r.seconds);
-    if (!free_edge) h_sbl.push_back(r.seconds), h_rrt.push_back(c.seconds);
+    if (!free_edge) h_sbl.push_back(r.seconds), h_rrt.push_back(c.seconds), hc_sbl.push_back(cpu_sbl);
     c_sbl.push_back(double(r.checks));
     // 3. Smoothing (§3.4.2) against OMPL's simplifier, same plan.
+    const long checks0 = checker.checks();
+    const double c1 = cpu_now();
     const SmoothingResult s = smooth_path(checker, r.path);
+    const double cpu_smooth = cpu_now() - c1;
+    if (!free_edge) hc_ours.push_back(cpu_smooth), h_len.push_back(s.length);
+    if (std::getenv("FOOTFALL_VERBOSE") && !free_edge)
+      std::printf("  hard query %d: SBL %.1f ms (CPU %.1f), %ld nodes, %.2f rad; smoothing %.1f ms (CPU %.1f), %d rounds, %ld edges, %ld configs, %.2f rad\n",
+                  k, 1e3 * r.seconds, 1e3 * cpu_sbl, long(r.path.cols()), r.length, 1e3 * s.seconds, 1e3 * cpu_smooth, s.iterations, s.edge_checks,
+                  checker.checks() - checks0, s.length);
     t_ours.push_back(s.seconds);
     if (!free_edge) h_ours.push_back(s.seconds), h_ratio.push_back(s.length / r.length);
     const auto t0 = Clock::now();
     const Eigen::MatrixXd o = sbl.simplify_with_ompl(r.path);
     t_ompl.push_back(seconds_since(t0));
     l_raw.push_back(r.length);
+    l_smooth.push_back(s.length);
     r_ours.push_back(s.length / r.length);
     r_ompl.push_back(path_length(o) / r.length);
     shorter += s.length < r.length - 1e-9 || r.path.cols() == 2;
@@ -108,16 +135,20 @@ int main(int argc, char** argv) {
   std::printf("  SBL:         %5.1f ms median, success %d/%d  (target <= 50 ms)\n", 1e3 * median(t_sbl), ok_sbl, queries);
   std::printf("  RRT-Connect: %5.1f ms median, success %d/%d  (OMPL reference, same queries)\n", 1e3 * median(t_rrt),
               ok_rrt, queries);
-  std::printf("  the %zu queries without a free straight edge: SBL %.1f ms, RRT-Connect %.1f ms median\n",
-              h_sbl.size(), 1e3 * median(h_sbl), 1e3 * median(h_rrt));
+  std::printf("  the %zu queries without a free straight edge: SBL %.1f ms median (max %.1f; CPU %.1f ms median, max %.1f),"
+              " RRT-Connect %.1f ms median\n",
+              h_sbl.size(), 1e3 * median(h_sbl), 1e3 * max_of(h_sbl), 1e3 * median(hc_sbl), 1e3 * max_of(hc_sbl),
+              1e3 * median(h_rrt));
   std::printf("  configurations checked per query (median): SBL %.0f, RRT-Connect %.0f\n", median(c_sbl), median(c_rrt));
   std::printf("  ratio SBL / RRT-Connect: %.2f\n", median(t_sbl) / std::max(1e-12, median(t_rrt)));
-  std::printf("smoothing the %d SBL plans (median raw length %.2f rad):\n", ok_sbl, median(l_raw));
+  std::printf("smoothing the %d SBL plans (median raw length %.2f rad, smoothed %.2f rad):\n", ok_sbl, median(l_raw),
+              median(l_smooth));
   std::printf("  Dijkstra-bisection (ours): %5.1f ms median, length x %.3f median, shorter %d/%d (target <= 50 ms)\n",
               1e3 * median(t_ours), median(r_ours), shorter, ok_sbl);
-  std::printf("  ours on the queries without a free straight edge: %.1f ms median, %.1f ms max, length x %.3f\n",
-              1e3 * median(h_ours), 1e3 * (h_ours.empty() ? 0.0 : *std::max_element(h_ours.begin(), h_ours.end())),
-              median(h_ratio));
+  std::printf("  ours on the queries without a free straight edge: %.1f ms median, %.1f ms max (CPU %.1f ms median, %.1f max),"
+              " length x %.3f, %.2f rad median\n",
+              1e3 * median(h_ours), 1e3 * max_of(h_ours), 1e3 * median(hc_ours), 1e3 * max_of(hc_ours), median(h_ratio),
+              median(h_len));
   std::printf("  OMPL simplifyMax:          %5.1f ms median, length x %.3f median\n", 1e3 * median(t_ompl),
               median(r_ompl));
   std::printf("  time ratio ours / OMPL: %.2f\n", median(t_ours) / std::max(1e-12, median(t_ompl)));

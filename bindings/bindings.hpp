@@ -21,4 +21,5 @@ void bind_walker_sim(pybind11::module_& m);
 void bind_perception(pybind11::module_& m);
 void bind_perception_selfimage(pybind11::module_& m);  // part of bind_perception (bindings/perception_selfimage.cpp)
 void bind_footfall(pybind11::module_& m);
+void bind_footfall_terrain(pybind11::module_& m);  // part of bind_footfall (bindings/footfall_terrain.cpp)
 }  // namespace ernest::bindings

@@ -246,6 +246,7 @@ void bind_footfall(py::module_& m) {
   m.def("sample_waypoints", &sample_waypoints, "mapper"_a, "map"_a, "checker"_a, "count"_a, "seed"_a,
         py::call_guard<py::gil_scoped_release>(),
         "(joints, count) collision-free waypoints above random stable cells.");
+  bind_footfall_terrain(m);  // the planner's DEM from the stereo map
 }
 
 }  // namespace ernest::bindings

@@ -80,13 +80,22 @@ struct LegCollisionChecker::Impl {
   std::vector<GeometryPtr> plain;               // swing shapes, not inflated
   double env_clearance = 0.0, own_clearance = 0.0;
   std::vector<Obstacle> obstacles;              // other legs and the chassis
+  // Obstacles grouped by leg (the chassis its own group) with a bounding sphere each: a swing
+  // shape far from a whole leg skips its capsules (most legs are far from the swing leg).
+  struct Group {
+    Eigen::Vector3d centre;
+    double bound = 0.0;
+    std::size_t begin = 0, end = 0;
+  };
+  std::vector<Group> groups;
+  std::vector<double> max_clearance;            // per swing shape: its largest table entry
   std::vector<std::array<int, 2>> own_pairs;    // swing shape pairs checked within the leg
   Eigen::MatrixXd table;
   std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> terrain;
   double terrain_top = 0.0;  // highest terrain point of the mesh
   // Highest terrain point per block of the mesh window: a shape entirely above the blocks under
   // it (plus the clearance) needs no mesh query (most of a swing happens in the air).
-  double block = 0.1, block_x0 = 0.0, block_y0 = 0.0;
+  double block = 0.05, block_x0 = 0.0, block_y0 = 0.0;
   int blocks = 0;
   Eigen::MatrixXd block_top;
   double local_top(const Eigen::Vector3d& centre, double bound) const {
@@ -99,7 +108,53 @@ struct LegCollisionChecker::Impl {
   walker::LegWorkspace ws;
   std::vector<fcl::Transform3d> poses;  // current swing shapes
   std::vector<Eigen::Vector3d> centres;
+  std::vector<std::array<Eigen::Vector3d, 2>> ends;  // axis end points (world)
   std::vector<double> lowest;            // lowest point of each swing shape (world z)
+  // The mesh's vertex heights (grid(i, j) at (grid_x0 + i grid_h, grid_y0 + j grid_h)).
+  Eigen::MatrixXd grid;
+  double grid_x0 = 0.0, grid_y0 = 0.0, grid_h = 1.0;
+  // Height of the triangle mesh at (x, y) exactly as FCL sees it (cell (i, j) split along its
+  // (i, j)-(i+1, j+1) diagonal); false outside the mesh.
+  bool surface(double x, double y, double& z) const {
+    const double u0 = (x - grid_x0) / grid_h, v0 = (y - grid_y0) / grid_h;
+    const double fi = std::floor(u0), fj = std::floor(v0);
+    if (!(fi >= 0.0 && fj >= 0.0 && fi < double(grid.rows() - 1) && fj < double(grid.cols() - 1))) return false;
+    const int i = int(fi), j = int(fj);
+    const double u = u0 - fi, v = v0 - fj;
+    const double z00 = grid(i, j), z10 = grid(i + 1, j), z01 = grid(i, j + 1), z11 = grid(i + 1, j + 1);
+    z = u >= v ? z00 + u * (z10 - z00) + v * (z11 - z10) : z00 + v * (z01 - z00) + u * (z11 - z01);
+    return true;
+  }
+  // Highest block top over an axis-aligned box (clamped to the mesh window).
+  double box_top(double xa, double xb, double ya, double yb) const {
+    const int i0 = std::clamp(int(std::floor((xa - block_x0) / block)), 0, blocks - 1);
+    const int i1 = std::clamp(int(std::floor((xb - block_x0) / block)), 0, blocks - 1);
+    const int j0 = std::clamp(int(std::floor((ya - block_y0) / block)), 0, blocks - 1);
+    const int j1 = std::clamp(int(std::floor((yb - block_y0) / block)), 0, blocks - 1);
+    return block_top.block(i0, j0, i1 - i0 + 1, j1 - j0 + 1).maxCoeff();
+  }
+  // Terrain test of swing shape k inflated to radius r without FCL where it is decided: 1 free
+  // (every piece of the axis, one block long, lies higher than r above the highest block under
+  // it), 0 colliding (a point of the axis lies less than r above the surface point straight below
+  // it, which is then inside the capsule; or below the surface: the terrain is solid), -1 open.
+  int terrain_quick(std::size_t k, double r) const {
+    const Eigen::Vector3d &a = ends[k][0], &b = ends[k][1];
+    const int pieces = std::max(1, int(std::ceil((b - a).head<2>().norm() / block)));
+    bool free = true;
+    for (int p = 0; p < pieces && free; ++p) {
+      const Eigen::Vector3d q0 = a + (double(p) / pieces) * (b - a), q1 = a + (double(p + 1) / pieces) * (b - a);
+      free = std::min(q0.z(), q1.z()) - r > box_top(std::min(q0.x(), q1.x()) - r, std::max(q0.x(), q1.x()) + r,
+                                                   std::min(q0.y(), q1.y()) - r, std::max(q0.y(), q1.y()) + r) + 1e-9;
+    }
+    if (free) return 1;
+    const int samples = std::max(1, int(std::ceil((b - a).head<2>().norm() / (0.5 * grid_h))));
+    for (int p = 0; p <= samples; ++p) {
+      const Eigen::Vector3d x = a + (double(p) / samples) * (b - a);
+      double z;
+      if (surface(x.x(), x.y(), z) && x.z() - z <= r) return 0;
+    }
+    return -1;
+  }
   fcl::CollisionRequestd request;
   fcl::CollisionResultd result;
   Eigen::VectorXd mid;                   // bisection scratch
@@ -117,6 +172,7 @@ struct LegCollisionChecker::Impl {
       const Eigen::Vector3d p0 = body * (ws.joint_position.col(i) + r * g.p0);
       const Eigen::Vector3d p1 = body * (ws.joint_position.col(i) + r * g.p1);
       poses[k] = segment_pose(p0, p1);
+      ends[k] = {p0, p1};
       centres[k] = 0.5 * (p0 + p1);
       lowest[k] = std::min(p0.z(), p1.z()) - g.radius;
       ++k;
@@ -125,6 +181,7 @@ struct LegCollisionChecker::Impl {
     const Eigen::Vector3d c = body * ws.wheel_centre;
     const double half = 0.5 * model.params().wheel_width;
     poses[k] = segment_pose(c - half * axle, c + half * axle);
+    ends[k] = {c - half * axle, c + half * axle};
     centres[k] = c;
     lowest[k] = c.z() - half * std::abs(axle.z()) - model.params().wheel_radius;
   }
@@ -169,6 +226,7 @@ LegCollisionChecker::LegCollisionChecker(const walker::WalkerModel& model,
   }
   const std::size_t count = s.specs.size();
   s.poses.resize(count);
+  s.ends.resize(count);
   s.centres.resize(count);
   s.lowest.resize(count);
 
@@ -194,18 +252,27 @@ LegCollisionChecker::LegCollisionChecker(const walker::WalkerModel& model,
   // Fixed obstacles: the other legs' capsules and the chassis, in the world.
   for (int k = 0; k < model.legs(); ++k) {
     if (k == leg) continue;
+    const std::size_t begin = s.obstacles.size();
     for (const walker::LinkCapsule& c : model.leg_capsules(k, q.col(k))) {
       const Eigen::Vector3d p0 = body * c.p0, p1 = body * c.p1;
       const double len = (p1 - p0).norm();
       s.obstacles.push_back({c.link < 0 ? n : c.link, make_capsule(c.radius, len), segment_pose(p0, p1),
                              0.5 * (p0 + p1), 0.5 * len + c.radius});
     }
+    s.groups.push_back({Eigen::Vector3d::Zero(), 0.0, begin, s.obstacles.size()});
   }
   fcl::Transform3d chassis_pose = fcl::Transform3d::Identity();
   chassis_pose.linear() = body.linear();
   chassis_pose.translation() = body.translation();
   s.obstacles.push_back({n + 1, chassis, chassis_pose, body.translation(),
                          std::hypot(p.chassis_collision_radius, p.chassis_collision_half_height)});
+  s.groups.push_back({Eigen::Vector3d::Zero(), 0.0, s.obstacles.size() - 1, s.obstacles.size()});
+  for (Impl::Group& g : s.groups) {
+    for (std::size_t o = g.begin; o < g.end; ++o) g.centre += s.obstacles[o].centre / double(g.end - g.begin);
+    for (std::size_t o = g.begin; o < g.end; ++o)
+      g.bound = std::max(g.bound, (s.obstacles[o].centre - g.centre).norm() + s.obstacles[o].bound);
+  }
+  for (const ShapeSpec& sp : s.specs) s.max_clearance.push_back(s.table.row(sp.type).maxCoeff());
   // The chassis is checked only against shapes that do not touch it in the standard stance.
   for (std::size_t a = 0; a < count; ++a)
     if (touches_chassis[a]) s.inflated[a][2 + n + 1].reset();
@@ -225,9 +292,14 @@ LegCollisionChecker::LegCollisionChecker(const walker::WalkerModel& model,
   s.block_y0 = y0;
   s.blocks = std::max(1, static_cast<int>(std::ceil(h * (cells - 1) / s.block)));
   s.block_top.setConstant(s.blocks, s.blocks, -kInf);
+  s.grid.resize(cells, cells);
+  s.grid_x0 = x0;
+  s.grid_y0 = y0;
+  s.grid_h = h;
   for (int i = 0; i < cells; ++i)
     for (int j = 0; j < cells; ++j) {
       const double x = x0 + i * h, y = y0 + j * h, z = terrain.height(x, y);
+      s.grid(i, j) = z;
       vertices.emplace_back(x, y, z);
       s.terrain_top = std::max(s.terrain_top, z);
     }
@@ -276,16 +348,24 @@ bool LegCollisionChecker::valid(const Eigen::Ref<const Eigen::VectorXd>& q_leg, 
     // Terrain: skip shapes entirely above the highest terrain point (plus clearance).
     if (!(wheel && !include_wheel)) {
       const double bound = 0.5 * s.specs[a].length + s.specs[a].radius + s.env_clearance;
-      if (s.lowest[a] <= s.local_top(s.centres[a], bound) + s.env_clearance + 1e-9 &&
-          s.hit(s.inflated[a][0], s.poses[a], s.terrain.get(), fcl::Transform3d::Identity()))
-        return false;
+      if (s.lowest[a] <= s.local_top(s.centres[a], bound) + s.env_clearance + 1e-9) {
+        const int quick = s.terrain_quick(a, s.specs[a].radius + s.env_clearance);
+        if (quick == 0) return false;
+        if (quick < 0 && s.hit(s.inflated[a][0], s.poses[a], s.terrain.get(), fcl::Transform3d::Identity()))
+          return false;
+      }
     }
-    for (const Obstacle& o : s.obstacles) {
-      const GeometryPtr& g = s.inflated[a][2 + o.type];
-      if (!g) continue;
-      const double reach = 0.5 * s.specs[a].length + s.specs[a].radius + s.table(s.specs[a].type, o.type);
-      if ((s.centres[a] - o.centre).norm() > reach + o.bound) continue;
-      if (s.hit(g, s.poses[a], o.geometry.get(), o.pose)) return false;
+    const double own = 0.5 * s.specs[a].length + s.specs[a].radius;
+    for (const Impl::Group& grp : s.groups) {
+      if ((s.centres[a] - grp.centre).squaredNorm() > std::pow(own + s.max_clearance[a] + grp.bound, 2)) continue;
+      for (std::size_t k = grp.begin; k < grp.end; ++k) {
+        const Obstacle& o = s.obstacles[k];
+        const GeometryPtr& g = s.inflated[a][2 + o.type];
+        if (!g) continue;
+        const double reach = own + s.table(s.specs[a].type, o.type);
+        if ((s.centres[a] - o.centre).norm() > reach + o.bound) continue;
+        if (s.hit(g, s.poses[a], o.geometry.get(), o.pose)) return false;
+      }
     }
   }
   for (const auto& pr : s.own_pairs) {

@@ -6,7 +6,12 @@
 // "within ε" of a capsule is exactly "intersects the capsule inflated by ε" (a Minkowski sum of a
 // capsule and a ball is a capsule), so every test is a boolean FCL collide on inflated capsules,
 // cheaper than a distance query. Edges between configurations are checked by recursive bisection
-// to a resolution ε in joint space (§3.4.1, ε = 0.01 rad).
+// to a resolution ε in joint space (§3.4.1, ε = 0.01 rad). The terrain is solid: before the FCL
+// mesh query, a capsule higher than its radius above the highest mesh block under each piece of
+// its axis is free, and one whose axis passes within its radius above (or below) the surface
+// straight under it collides (that point of the surface is inside it); only the rest goes to
+// FCL. The other legs are grouped per leg, and a leg whose bounding sphere is out of reach is
+// skipped whole.
 #pragma once
 
 #include <Eigen/Core>

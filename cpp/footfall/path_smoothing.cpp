@@ -25,16 +25,21 @@ namespace {
 using Graph = boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS, boost::no_property,
                                     boost::property<boost::edge_weight_t, double>>;
 
+// What is known of the edge between nodes a < b, kept across the rounds (a node keeps its
+// configuration when the path is simplified or bisected, so an edge checked in one round is not
+// checked again in the next).
+enum : char { kUnchecked = 0, kFree = 1, kBlocked = 2 };
+
 // Lazy Dijkstra over every shortcut between the nodes (Fig. 4, steps 2 and 4): returns the node
-// indices of the shortest collision-free path from the first node to the last.
+// indices of the shortest collision-free path from the first node to the last. `known` (n × n,
+// entry a * n + b for a < b) holds the edges' states; blocked edges stay out of the graph.
 std::vector<int> shortest(LegCollisionChecker& checker, const Eigen::MatrixXd& nodes, double epsilon,
-                          long& checks) {
+                          std::vector<char>& known, long& checks) {
   const int n = static_cast<int>(nodes.cols());
   Graph g(n);
-  std::vector<char> known(std::size_t(n) * n, 0);  // 0 unchecked, 1 free (checked or a path edge)
   for (int i = 0; i < n; ++i)
-    for (int j = i + 1; j < n; ++j) boost::add_edge(i, j, (nodes.col(j) - nodes.col(i)).norm(), g);
-  for (int i = 0; i + 1 < n; ++i) known[std::size_t(i) * n + i + 1] = 1;  // the path's own edges
+    for (int j = i + 1; j < n; ++j)
+      if (known[std::size_t(i) * n + j] != kBlocked) boost::add_edge(i, j, (nodes.col(j) - nodes.col(i)).norm(), g);
   std::vector<std::size_t> pred(n);
   std::vector<double> dist(n);
   for (;;) {
@@ -43,14 +48,17 @@ std::vector<int> shortest(LegCollisionChecker& checker, const Eigen::MatrixXd& n
     while (route.back() != 0) route.push_back(static_cast<int>(pred[route.back()]));
     std::reverse(route.begin(), route.end());
     bool free = true;
-    for (std::size_t k = 0; k + 1 < route.size(); ++k) {
+    // Early exit: the first blocked edge of the answer ends this pass (Dijkstra then answers
+    // without it); the edges after it may never be on a shortest path again.
+    for (std::size_t k = 0; k + 1 < route.size() && free; ++k) {
       const int a = std::min(route[k], route[k + 1]), b = std::max(route[k], route[k + 1]);
       char& state = known[std::size_t(a) * n + b];
-      if (state) continue;
+      if (state != kUnchecked) continue;
       ++checks;
       if (checker.motion_valid(nodes.col(a), nodes.col(b), epsilon)) {
-        state = 1;
+        state = kFree;
       } else {
+        state = kBlocked;
         boost::remove_edge(a, b, g);
         free = false;
       }
@@ -71,23 +79,36 @@ SmoothingResult smooth_path(LegCollisionChecker& checker, const Eigen::Ref<const
   r.initial_length = path_length(path);
   Eigen::MatrixXd nodes = path;
   double length = r.initial_length;
+  std::vector<char> known(std::size_t(nodes.cols()) * nodes.cols(), kUnchecked);
+  for (Eigen::Index i = 0; i + 1 < nodes.cols(); ++i) known[std::size_t(i) * nodes.cols() + i + 1] = kFree;  // the plan's edges
   for (r.iterations = 1; r.iterations <= options.max_iterations; ++r.iterations) {
-    const std::vector<int> route = shortest(checker, nodes, options.epsilon, r.edge_checks);
-    Eigen::MatrixXd simplified(nodes.rows(), static_cast<Eigen::Index>(route.size()));
-    for (std::size_t k = 0; k < route.size(); ++k) simplified.col(Eigen::Index(k)) = nodes.col(route[k]);
+    const std::vector<int> route = shortest(checker, nodes, options.epsilon, known, r.edge_checks);
+    const Eigen::Index n = nodes.cols(), m = static_cast<Eigen::Index>(route.size());
+    Eigen::MatrixXd simplified(nodes.rows(), m);
+    for (Eigen::Index k = 0; k < m; ++k) simplified.col(k) = nodes.col(route[std::size_t(k)]);
     const double shorter = path_length(simplified);
     const bool done = length - shorter < options.min_improvement * length;
     nodes = std::move(simplified);
     length = shorter;
-    if (done || 2 * nodes.cols() - 1 > options.max_nodes) break;
-    // Fig. 4 step 3: bisect every edge (its midpoint lies on a checked edge).
-    Eigen::MatrixXd bisected(nodes.rows(), 2 * nodes.cols() - 1);
-    for (Eigen::Index k = 0; k + 1 < nodes.cols(); ++k) {
+    if (done || 2 * m - 1 > options.max_nodes) break;
+    // Fig. 4 step 3: bisect every edge (its midpoint lies on a checked edge). The states carry
+    // over: old node k is new node 2k; the halves of a route edge are free.
+    Eigen::MatrixXd bisected(nodes.rows(), 2 * m - 1);
+    const Eigen::Index b = 2 * m - 1;
+    std::vector<char> next(std::size_t(b) * b, kUnchecked);
+    for (Eigen::Index k = 0; k < m; ++k) {
       bisected.col(2 * k) = nodes.col(k);
-      bisected.col(2 * k + 1) = 0.5 * (nodes.col(k) + nodes.col(k + 1));
+      if (k + 1 < m) {
+        bisected.col(2 * k + 1) = 0.5 * (nodes.col(k) + nodes.col(k + 1));
+        next[std::size_t(2 * k) * b + 2 * k + 1] = next[std::size_t(2 * k + 1) * b + 2 * k + 2] = kFree;
+      }
+      for (Eigen::Index l = k + 1; l < m; ++l) {
+        const int i = std::min(route[std::size_t(k)], route[std::size_t(l)]), j = std::max(route[std::size_t(k)], route[std::size_t(l)]);
+        next[std::size_t(2 * k) * b + 2 * l] = known[std::size_t(i) * n + j];
+      }
     }
-    bisected.col(bisected.cols() - 1) = nodes.col(nodes.cols() - 1);
     nodes = std::move(bisected);
+    known = std::move(next);
   }
   r.iterations = std::min(r.iterations, options.max_iterations);
   r.path = std::move(nodes);

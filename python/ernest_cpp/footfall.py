@@ -19,6 +19,8 @@ from ._core.footfall import (  # noqa: F401  (re-exports)
     CollisionOptions,
     LegCollisionChecker,
     LegPlanner,
+    MapTerrain,
+    MapTerrainOptions,
     PlannerOptions,
     PlannerType,
     PlanResult,
@@ -34,6 +36,7 @@ from ._core.footfall import (  # noqa: F401  (re-exports)
     StepPlan,
     SwingSag,
     SwingSagOptions,
+    TerrainCell,
     default_clearance_table,
     first_colliding_edge,
     path_length,
@@ -42,16 +45,20 @@ from ._core.footfall import (  # noqa: F401  (re-exports)
     rock_field,
     sample_waypoints,
     smooth_path,
+    terrain_from_arrays,
+    terrain_from_map,
 )
 
 __all__ = [
     "CellEvaluation", "CellStatus", "CollisionOptions", "LegCollisionChecker", "LegPlanner",
-    "PlannerOptions", "PlannerType", "PlanResult", "PlanStatus", "RockFieldOptions",
+    "MapTerrain", "MapTerrainOptions", "PlannerOptions", "PlannerType", "PlanResult", "PlanStatus",
+    "RockFieldOptions",
     "SmoothingOptions", "SmoothingResult", "StabilityCriterion", "StabilityMap",
     "StabilityMapOptions", "StabilityMapper", "StepOptions", "StepPlan", "SwingSag",
     "SwingSagOptions", "default_clearance_table", "first_colliding_edge", "map_arrays",
     "path_length", "plan_step", "plot_leg_path", "plot_stability_map", "predict_swing_sag",
-    "rock_field", "sample_waypoints", "smooth_path", "stability_map",
+    "rock_field", "sample_waypoints", "smooth_path", "stability_map", "TerrainCell",
+    "terrain_from_arrays", "terrain_from_map",
 ]
 
 
@@ -90,8 +97,9 @@ def plot_stability_map(arrays: dict, path, terrain=None, feet=None, goal=None, t
     if terrain is not None:
         xs, ys = x[::4], y[::4]
         hz = _terrain_grid(terrain, xs, ys)
+        # capped at 1.5 m: a stereo DEM's unknown cells are columns far above the rocks
         im = ax.imshow(hz.T, origin="lower", extent=(xs[0], xs[-1], ys[0], ys[-1]), cmap="Greys",
-                       alpha=0.9, vmin=0.0, vmax=max(0.05, float(hz.max())))
+                       alpha=0.9, vmin=0.0, vmax=min(1.5, max(0.05, float(hz.max()))))
         fig.colorbar(im, ax=ax, label="terrain height [m]", shrink=0.8)
     colour = np.ma.masked_equal(status.astype(float), 0.0)
     ax.imshow(colour.T, origin="lower", extent=ext, cmap=ListedColormap(["#d62728", "#2ca02c"]),

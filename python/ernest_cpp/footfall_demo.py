@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from . import footfall as F
+from . import footfall_terrain
 from . import walker as W
 
 
@@ -52,7 +53,7 @@ MIN_MARGIN = 0.7
 
 
 def run(out: Path, steps: int = 6, stride: float = 0.4, seed: int = 3, cell: float = 0.02,
-        rocks: int = 40, log=print) -> dict:
+        rocks: int = 40, log=print, terrain_source: str = "truth") -> dict:
     out.mkdir(parents=True, exist_ok=True)
     model = W.WalkerModel(W.sdm_b_parameters())
     # one cycle walking along +x: the gait planner's reverse wave (§5.3.1; front to rear, left of
@@ -65,7 +66,9 @@ def run(out: Path, steps: int = 6, stride: float = 0.4, seed: int = 3, cell: flo
     ro = F.RockFieldOptions()
     ro.rocks, ro.seed, ro.length, ro.centre_x, ro.keep_clear, ro.inner_radius = rocks, seed, 10.0, 1.0, 0.45, 1.4
     ro.max_height = 0.5
-    terrain = F.rock_field(ro, keep)
+    truth = F.rock_field(ro, keep)  # the simulator's terrain
+    # the planner's DEM: the ground truth, or stereo -> fused map (footfall_terrain)
+    terrain = footfall_terrain.planner_terrain(terrain_source, truth, body)
     mo = F.StabilityMapOptions()
     mo.cell = cell
     mo.min_margin = MIN_MARGIN
@@ -208,13 +211,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=3, help="rock field and planner seed")
     p.add_argument("--cell", type=float, default=0.02, help="stability map cell [m]")
     p.add_argument("--rocks", type=int, default=40)
+    p.add_argument("--terrain", choices=footfall_terrain.SOURCES, default="truth",
+                   help="planner's DEM: the simulator's ground truth or the stereo-fused map")
     p.set_defaults(func=_main)
 
 
 def _main(args: argparse.Namespace) -> int:
     if args.steps < 1 or not (0.0 < args.stride < 2.0):
         raise SystemExit("ernest footfall: need --steps >= 1 and 0 < --stride < 2")
-    r = run(args.out, args.steps, args.stride, args.seed, args.cell, args.rocks)
+    r = run(args.out, args.steps, args.stride, args.seed, args.cell, args.rocks, terrain_source=args.terrain)
     solved = sum(s["solved"] for s in r["steps"])
     print(f"wrote {args.out}/footfall_report.md, footfall.json and {len(list(args.out.glob('*.png')))} PNGs "
           f"({solved}/{len(r['steps'])} steps planned, {r['seconds']:.1f} s)")
