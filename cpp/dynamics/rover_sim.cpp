@@ -390,11 +390,9 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   shear_x.fill(0.0);
   shear_y.fill(0.0);
   compaction.fill(0.0);
-  row_mode.fill(kFree);
-  row_mode_before.fill(kFree);
-  alternating = false;
+  guesser.reset();
   rigid_deflection.fill(Vec3::Zero());
-  obstacle_mode.fill(kFree);
+  obstacle_mode.fill(RowState::Free);
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);
@@ -551,9 +549,9 @@ Snapshot RoverSim::snapshot() const {
   s.shear_x = impl_->shear_x;
   s.shear_y = impl_->shear_y;
   s.compaction = impl_->compaction;
-  s.row_mode = impl_->row_mode;
-  s.row_mode_before = impl_->row_mode_before;
-  s.alternating = impl_->alternating;
+  s.row_mode = impl_->guesser.last();
+  s.row_mode_before = impl_->guesser.before();
+  s.alternating = impl_->guesser.alternating();
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < 3; ++k) s.rigid_deflection[i][k] = impl_->rigid_deflection[i][k];
   s.obstacle_mode = impl_->obstacle_mode;
@@ -566,6 +564,10 @@ void RoverSim::restore(const Snapshot& s) {
   const ExclusiveUse busy(impl_->in_use, "RoverSim.restore");
   impl_->run_ode([] {});  // refuses after an ODE internal error
   require(s.valid, "RoverSim.restore: empty snapshot");
+  for (const auto* modes : {&s.row_mode, &s.row_mode_before})
+    for (RowState m : *modes)
+      require(static_cast<int>(m) >= 0 && static_cast<int>(m) <= 3,
+              "RoverSim.restore: corrupt snapshot (row_mode)");
   init_ode_once();
   impl_->lcp.load(s.solver_patterns);  // first: it may throw on a corrupt snapshot
   for (int b = 0; b < 6; ++b) {
@@ -584,13 +586,12 @@ void RoverSim::restore(const Snapshot& s) {
   impl_->shear_x = s.shear_x;
   impl_->shear_y = s.shear_y;
   impl_->compaction = s.compaction;
-  impl_->row_mode = s.row_mode;
-  impl_->row_mode_before = s.row_mode_before;
-  impl_->alternating = s.alternating;
+  impl_->guesser.set(s.row_mode, s.row_mode_before, s.alternating);
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < 3; ++k) impl_->rigid_deflection[i][k] = s.rigid_deflection[i][k];
-  for (std::int8_t m : s.obstacle_mode)
-    require(m == kFree || m == kBounded, "RoverSim.restore: corrupt snapshot (obstacle_mode)");
+  for (RowState m : s.obstacle_mode)
+    require(m == RowState::Free || m == RowState::Bounded,
+            "RoverSim.restore: corrupt snapshot (obstacle_mode)");
   impl_->obstacle_mode = s.obstacle_mode;
   impl_->pending_force.setZero();
   impl_->diverged = false;

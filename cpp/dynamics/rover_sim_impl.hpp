@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/dynamics/row_guess.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/soil/bekker_wong.hpp"
 
@@ -68,11 +69,7 @@ enum RowKind : int { kShearX = 0, kShearY = 1, kCompaction = 2, kWheelMotor = 3,
 constexpr int kRowsPerWheel = 5;
 constexpr int kYawMotor = 4 * kRowsPerWheel, kRollMotor = kYawMotor + 1;
 static_assert(kGuessedRowCount == kRollMotor + 1, "Snapshot::row_mode covers every guessed row");
-/// Guess for a bounded row: inside its bounds (solved as an unbounded row, hence factorised with
-/// the joints instead of pivoted), or at its upper / lower bound (applied as an explicit force).
-constexpr std::int8_t kFree = 0, kAtHi = 1, kAtLo = 2;
-constexpr std::int8_t kBounded = 3;  // emit the row with its bounds and let ODE pivot
-constexpr int kMaxGuesses = 3;       // guesses of a step before failing rows are bounded
+// (a guess per row: RowState, rover_sim.hpp; the guesser: row_guess.hpp)
 // Below 1 mN a soil row is dropped: a CFM of eps / F would overflow the LCP as F -> 0.
 constexpr double kMinRowBound = 1e-3;
 constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
@@ -81,11 +78,6 @@ constexpr int kMaxSlipSolves = 12;
 constexpr double kSlipTolerance = 2e-3;  // slips this close to eq 12's end value: accepted
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
-
-// Where a soft row's law lambda = u puts it for bounds +-bound.
-inline std::int8_t status_of(double u, double bound) {
-  return u >= bound ? kAtHi : (u <= -bound ? kAtLo : kFree);
-}
 
 // A force at a point: added to a body's force and, about its centre of mass (arm from it), its
 // torque.
@@ -156,10 +148,9 @@ struct RoverSim::Impl {
   RoverState st{};
   // The soil rows' levels (shear used / shear cap, compaction force) that the soil's remaining
   // terms (eq 32's shear part, the axle torque) are evaluated at: the step's own, solved with the
-  // slip (rover_step.cpp); and the row guesses.
+  // slip (rover_step.cpp); and the row guesses (the last two steps' outcomes, row_guess.hpp).
   std::array<double, 4> shear_x{}, shear_y{}, compaction{};
-  std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
-  bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
+  detail::RowGuesser guesser;
   // Rigid ground (rover_rigid.cpp): each tyre's tangential deflection (world, in the contact's
   // tangent plane) at the start of the step (Snapshot) and at the end of the current attempt.
   std::array<Vec3, 4> rigid_deflection{}, rigid_deflection_end{};
@@ -209,14 +200,14 @@ struct RoverSim::Impl {
   int n_obstacle_contacts = 0;
   // Obstacle contacts' guesses (rover_rigid.cpp): each point's wheel (-1: not a wheel) and side
   // (the wheel is the joint's body 1 or 2), its feedback; per wheel whether its points are
-  // emitted sticking (kFree: friction rows unbounded, checked after the step) or bounded
-  // (kBounded: ODE's friction bounded by mu times the normal force), for this step's attempts
+  // emitted sticking (Free: friction rows unbounded, checked after the step) or bounded
+  // (Bounded: ODE's friction bounded by mu times the normal force), for this step's attempts
   // (obstacle_try) and as the next step's guess (obstacle_mode, in the Snapshot); points of a
   // sticking wheel found carrying no normal force, emitted without friction rows (obstacle_off).
   std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_wheel{};
   std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
   std::array<dJointFeedback, detail::kMaxObstacleContacts> obstacle_fb{};
-  std::array<std::int8_t, 4> obstacle_mode{}, obstacle_try{}, obstacle_next{};
+  std::array<RowState, 4> obstacle_mode{}, obstacle_try{}, obstacle_next{};
   std::uint64_t obstacle_off = 0;
   bool rows_held = true;  // settle(): the guessed rows (not the obstacles) held
   std::array<dGeomID, detail::kMaxObstacleContacts> touched{};  // obstacles in the contacts
@@ -225,7 +216,6 @@ struct RoverSim::Impl {
   std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
   std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
   detail::LcpWorkspace lcp;  // the sparse constraint solves (ode_lcp.hpp)
-  int attempts_last_step = 0;                   // 1 = first guess right; kMaxGuesses + 1 = exact
   SolverStats stats{};
 
   Impl(const RoverParameters& params, const HeightMap& terrain,
@@ -259,28 +249,27 @@ struct RoverSim::Impl {
   double soil_terms_gap(int wheel, double end_slip) const;
   void end_velocity(int wheel, double& vx, double& vcx) const;
   void soil_levels(int wheel);
-  bool solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess,
-                  std::array<std::int8_t, kGuessedRowCount>& next,
-                  std::array<std::int8_t, kGuessedRowCount>& tried, int& attempts);
+  bool solve_rows(detail::RowStates& guess, detail::RowStates& next, detail::RowStates& tried,
+                  int& attempts);
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);
-  void emit_obstacles(const std::int8_t* modes);
-  bool settle_obstacles(const std::int8_t* modes);
+  void emit_obstacles(detail::RowModes modes);
+  bool settle_obstacles(detail::RowModes modes);
   struct DriveRow {
     int row;
     Vec3 axis;         // world, at the start of the step
     int body1, body2;  // the row drives (w_1 - w_2) . axis
   };
   DriveRow drive_row(int k) const;
-  void emit(const std::int8_t* modes);
-  void emit_ground(int wheel, const std::int8_t* modes, Vec3& wheel_force, Vec3& wheel_torque);
-  bool settle(const std::int8_t* modes, std::int8_t* next);
+  void emit(detail::RowModes modes);
+  void emit_ground(int wheel, detail::RowModes modes, Vec3& wheel_force, Vec3& wheel_torque);
+  bool settle(detail::RowModes modes, detail::RowStates& next);
   // rover_rigid.cpp: rigid ground under the wheels
   void prepare_rigid();
-  bool rigid_sticking(const std::int8_t* modes, int wheel) const;
-  void emit_rigid(int wheel, const std::int8_t* modes);
-  bool settle_rigid(int wheel, const std::int8_t* modes, const Vec3& patch_velocity,
-                    std::int8_t* next);
+  bool rigid_sticking(detail::RowModes modes, int wheel) const;
+  void emit_rigid(int wheel, detail::RowModes modes);
+  bool settle_rigid(int wheel, detail::RowModes modes, const Vec3& patch_velocity,
+                    detail::RowStates& next);
   void commit_rigid();
   void save_bodies();
   void restore_bodies();

@@ -605,7 +605,7 @@ void expect_guesses_match_pivoting(SimOptions o, const HeightMap& hm, double hea
     ASSERT_LE(gap, 1.0) << "step " << k;
     ASSERT_NEAR(guessed.state().wheel_load[0], pivoted.state().wheel_load[0], 1e-3) << k;
     ASSERT_NEAR(guessed.state().wheel_torque[0], pivoted.state().wheel_torque[0], 1e-3) << k;
-    for (auto m : guessed.snapshot().row_mode) seen[std::min<int>(m, 2)] += 1;
+    for (auto m : guessed.snapshot().row_mode) seen[std::min(static_cast<int>(m), 2)] += 1;
   }
   const SolverStats& s = guessed.solver_stats();
   EXPECT_EQ(s.steps, static_cast<std::uint64_t>(steps));
