@@ -200,8 +200,10 @@ void Commands::validate() const {
   require_in_range(o, "roll_torque", roll_torque, -kMaxCommandTorque, kMaxCommandTorque);
 }
 
-RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
-                     const std::vector<BoxObstacle>& obstacles, const SimOptions& options)
+namespace detail {
+
+RoverModel::RoverModel(const RoverParameters& params, const HeightMap& terrain,
+                       const std::vector<BoxObstacle>& obstacles, const SimOptions& options)
     : p(params), hm(terrain), boxes(obstacles), opt(options),
       // sign(v_x) exact in the model: its regularisation is the compaction row's (rover_step.cpp)
       soil([&] {
@@ -209,9 +211,13 @@ RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
         s.eps_direction = 0.0;
         return s;
       }(), soil::WheelGeometry{params.wheel_radius, params.wheel_width},
-           options.soil_points_per_panel) {}
+           options.soil_points_per_panel),
+      mu([&] {
+        std::mt19937_64 rng(options.seed);
+        return options.friction >= 0.0 ? options.friction : options.rigid.sample_friction(rng);
+      }()) {}
 
-RoverSim::Impl::~Impl() {
+RoverModel::~RoverModel() {
   if (contacts) dJointGroupDestroy(contacts);
   if (rover_space) dSpaceDestroy(rover_space);  // destroys its geoms (cleanup on by default)
   if (obstacle_space) dSpaceDestroy(obstacle_space);
@@ -221,6 +227,12 @@ RoverSim::Impl::~Impl() {
   }
   if (threading) dThreadingFreeImplementation(threading);
 }
+
+}  // namespace detail
+
+RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
+                     const std::vector<BoxObstacle>& obstacles, const SimOptions& options)
+    : RoverModel(params, terrain, obstacles, options) {}
 
 void RoverSim::Impl::build() {
   init_ode_once();
@@ -241,8 +253,6 @@ void RoverSim::Impl::build() {
   obstacle_space = dSimpleSpaceCreate(nullptr);
   contacts = dJointGroupCreate(0);
 
-  std::mt19937_64 rng(opt.seed);
-  mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
   lcp.exact_friction = opt.ground == GroundType::Rigid;  // Coulomb's cap for sliding tyres
   // On soil the rocks' sliding contacts: Coulomb's cap in the sparse path (issue 17).
   lcp.coulomb_friction = opt.ground == GroundType::Soil && opt.guess_obstacle_contacts;

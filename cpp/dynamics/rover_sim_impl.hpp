@@ -108,24 +108,28 @@ struct MotorRow {
   double target = 0.0, bound = 0.0;
 };
 
-}  // namespace detail
+// The model (pinocchio's Model): what RoverSim is built from and what build() creates once. The
+// values are const. The ODE objects are mutable by nature (ODE's API takes them non-const, a step
+// moves the bodies and sets the drives' parameters), but the model is their set: build() creates
+// every body, geom and joint, and no step creates or destroys one (a step's contact joints live in
+// `contacts`, a joint group emptied after every attempt, never re-created). Destroyed with it.
+struct RoverModel {
+  RoverModel(const RoverParameters& params, const HeightMap& terrain,
+             const std::vector<BoxObstacle>& obstacles, const SimOptions& options);
+  ~RoverModel();
+  RoverModel(const RoverModel&) = delete;
+  RoverModel& operator=(const RoverModel&) = delete;
 
-struct RoverSim::Impl {
-  using Vec3 = detail::Vec3;
-  using Mat3 = detail::Mat3;
+  const RoverParameters p;
+  const HeightMap hm;
+  const std::vector<BoxObstacle> boxes;
+  const SimOptions opt;
+  const soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels: ODE's rows
+  // Coulomb friction of the obstacles and of rigid ground: opt.friction, or drawn once from
+  // opt.rigid with opt.seed.
+  const double mu;
 
-  RoverParameters p;
-  HeightMap hm;
-  std::vector<BoxObstacle> boxes;
-  SimOptions opt;
-  soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
-  double mu = 0.5;
-  double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
-  bool obstacles_collected = false;  // step() found this step's obstacle contacts already
-  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at h
-  // The tyre's along x and y on rigid ground (rover_rigid.cpp).
-  std::array<double, 2> tangential_erp{}, tangential_cfm{};
-
+  // ODE objects, created by RoverSim::Impl::build() (the joints' feedback buffers are data)
   dWorldID world = nullptr;
   dThreadingImplementationID threading = nullptr;
   dSpaceID rover_space = nullptr, obstacle_space = nullptr;
@@ -133,16 +137,18 @@ struct RoverSim::Impl {
   std::array<dBodyID, 6> body{};
   std::array<dGeomID, 6> geom{};
   std::array<dJointID, 4> hinge{};
-  std::array<dJointFeedback, 4> hinge_fb{};
   std::array<dJointID, 4> wheel_motor{};  // one-axis AMotors (outside the hinges: see build())
-  std::array<dJointFeedback, 4> wheel_motor_fb{};
   dJointID gimbal = nullptr;        // universal joint with the stops
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
-  dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
-  // Ground feedback: each wheel's contact with the terrain (rover_rows.cpp).
-  std::array<dJointFeedback, 4> ground_fb{};
   std::vector<dGeomID> obstacle_geoms;
-  std::exception_ptr callback_error;
+};
+
+// The data (pinocchio's Data): everything a step reads and writes. The state a Snapshot carries
+// (commands, sensors, the soil rows' levels, the guesses, the tyres' deflections, the solver's
+// orderings), caches of what was last set in ODE, and the step's working arrays (preallocated:
+// the hot loop never allocates).
+struct RoverData {
+  using Vec3 = detail::Vec3;
 
   Commands cmd{};
   RoverState st{};
@@ -154,6 +160,7 @@ struct RoverSim::Impl {
   // Rigid ground (rover_rigid.cpp): each tyre's tangential deflection (world, in the contact's
   // tangent plane) at the start of the step (Snapshot) and at the end of the current attempt.
   std::array<Vec3, 4> rigid_deflection{}, rigid_deflection_end{};
+  // Caches of what was last set in ODE's joints (set again only when it changes).
   std::array<bool, 2> stop_set{};  // the gimbal's yaw / roll stop is set (prepare_actuators)
   // The drives' AMotor parameters as last set (target rate, torque bound), NaN = never (emit()).
   std::array<std::array<double, 2>, 6> motor_set = [] {
@@ -166,27 +173,22 @@ struct RoverSim::Impl {
   // ODE failed internally (OdeInternalError): its world may be inconsistent (an exception left
   // dWorldStep half way), so it is never stepped, reset or restored again.
   std::string ode_failure;
-  // Held by every public method (cpp/common/exclusive_use.hpp): one thread at a time.
-  mutable std::atomic<bool> in_use{false};
 
-  /// Runs f (which calls into ODE); an ODE internal error becomes SimulationDiverged.
-  template <class F>
-  void run_ode(F&& f) {
-    if (!ode_failure.empty())
-      throw SimulationDiverged("RoverSim: ODE failed internally earlier (" + ode_failure +
-                               "); this simulator cannot be used again, create a new RoverSim");
-    try {
-      f();
-    } catch (const detail::OdeInternalError& e) {
-      ode_failure = e.what();
-      diverged = true;
-      throw SimulationDiverged(std::string("SimulationDiverged: ODE internal error (") + e.what() +
-                               ") at t = " + std::to_string(st.time) +
-                               " s; this simulator cannot be used again, create a new RoverSim");
-    }
-  }
+  // The step being taken: its length and the §3.4 spring–dampers as ERP / CFM at it.
+  double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
+  bool obstacles_collected = false;  // step() found this step's obstacle contacts already
+  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at h
+  // The tyre's along x and y on rigid ground (rover_rigid.cpp).
+  std::array<double, 2> tangential_erp{}, tangential_cfm{};
+  // Buffers ODE writes the joints' forces into (registered with the joints by build()).
+  std::array<dJointFeedback, 4> hinge_fb{};
+  std::array<dJointFeedback, 4> wheel_motor_fb{};
+  dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
+  // Ground feedback: each wheel's contact with the terrain (rover_rows.cpp).
+  std::array<dJointFeedback, 4> ground_fb{};
+  std::exception_ptr callback_error;
 
-  // ---- per-step working data (preallocated; the hot loop never allocates) ----
+  // ---- per-step working data ----
   std::array<detail::GroundContact, 4> ground{};
   std::array<detail::MotorRow, 6> motor{};  // wheels FL..RR, yaw, roll
   Vec3 yaw_axis = Vec3::UnitZ(), roll_axis = Vec3::UnitX();
@@ -217,10 +219,37 @@ struct RoverSim::Impl {
   std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
   detail::LcpWorkspace lcp;  // the sparse constraint solves (ode_lcp.hpp)
   SolverStats stats{};
+};
+
+}  // namespace detail
+
+/// The simulator: the model, its data, and the functions of a step (rover_*.cpp).
+struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
+  using Vec3 = detail::Vec3;
+  using Mat3 = detail::Mat3;
+
+  // Held by every public method (cpp/common/exclusive_use.hpp): one thread at a time.
+  mutable std::atomic<bool> in_use{false};
+
+  /// Runs f (which calls into ODE); an ODE internal error becomes SimulationDiverged.
+  template <class F>
+  void run_ode(F&& f) {
+    if (!ode_failure.empty())
+      throw SimulationDiverged("RoverSim: ODE failed internally earlier (" + ode_failure +
+                               "); this simulator cannot be used again, create a new RoverSim");
+    try {
+      f();
+    } catch (const detail::OdeInternalError& e) {
+      ode_failure = e.what();
+      diverged = true;
+      throw SimulationDiverged(std::string("SimulationDiverged: ODE internal error (") + e.what() +
+                               ") at t = " + std::to_string(st.time) +
+                               " s; this simulator cannot be used again, create a new RoverSim");
+    }
+  }
 
   Impl(const RoverParameters& params, const HeightMap& terrain,
        const std::vector<BoxObstacle>& obstacles, const SimOptions& options);
-  ~Impl();
 
   Vec3 axle_world(int i) const { return to_vec3(dBodyGetRotation(body[2 + i]), 1); }
   Mat3 rot(int b) const { return detail::to_mat(dBodyGetRotation(body[b])); }
