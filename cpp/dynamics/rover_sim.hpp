@@ -227,7 +227,9 @@ struct Snapshot {
 /// further step, reset and restore: create a new one.
 class RoverSim {
  public:
-  static constexpr int kObservationSize = 65;
+  /// The rover's state as a flat vector (state_vector()): kStateVectorSize values. Not the
+  /// policy's observation (45 values, cpp/sensing/observation.hpp, layout ernest-obs-v2).
+  static constexpr int kStateVectorSize = 65;
   static constexpr int kCommandSize = 8;
 
   RoverSim(const RoverParameters& params, const HeightMap& terrain,
@@ -257,9 +259,9 @@ class RoverSim {
   const RoverState& state() const;
   /// A copy of state(), taken under the one-thread-at-a-time rule (for the Python binding).
   RoverState state_copy() const;
-  /// Fixed layout of kObservationSize values; names from observation_names().
-  void observation(double* out) const;
-  static std::vector<std::string> observation_names();
+  /// state() as kStateVectorSize values in a fixed layout; names from state_vector_names().
+  void state_vector(double* out) const;
+  static std::vector<std::string> state_vector_names();
 
   Snapshot snapshot() const;
   void restore(const Snapshot& s);

@@ -464,17 +464,17 @@ TEST(BatchStepper, ThreadsGiveTheSameBitsAsSequentialStepping) {
   // Also a stress test: ODE's shared default threading object used to abort here when two worlds
   // stepped concurrently (each world now owns its own).
   const int n = 4, steps = 60;
-  std::vector<double> seq(n * RoverSim::kObservationSize);
+  std::vector<double> seq(n * RoverSim::kStateVectorSize);
   for (int i = 0; i < n; ++i) {
     auto sim = rock_field(10 + i);
     drive(*sim, steps);
-    sim->observation(seq.data() + i * RoverSim::kObservationSize);
+    sim->state_vector(seq.data() + i * RoverSim::kStateVectorSize);
   }
   for (int rep = 0; rep < 5; ++rep) {
     std::vector<std::shared_ptr<RoverSim>> sims;
     for (int i = 0; i < n; ++i) sims.push_back(std::shared_ptr<RoverSim>(rock_field(10 + i).release()));
     BatchStepper batch(sims, 2);
-    std::vector<double> obs(n * RoverSim::kObservationSize);
+    std::vector<double> obs(n * RoverSim::kStateVectorSize);
     for (int k = 0; k < steps; ++k) {
       std::vector<double> cmd(n * RoverSim::kCommandSize);
       for (int i = 0; i < n; ++i) {

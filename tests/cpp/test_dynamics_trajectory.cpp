@@ -34,9 +34,9 @@ struct Hash {
   }
   void values(const double* v, std::size_t n) { bytes(v, n * sizeof(double)); }
   void state_of(const RoverSim& sim) {
-    double s[RoverSim::kObservationSize];
-    sim.observation(s);
-    values(s, RoverSim::kObservationSize);
+    double s[RoverSim::kStateVectorSize];
+    sim.state_vector(s);
+    values(s, RoverSim::kStateVectorSize);
   }
   void bodies_of(const RoverSim& sim) {
     const Snapshot snap = sim.snapshot();
@@ -123,7 +123,7 @@ std::uint64_t batch() {  // three rovers on two threads, four steps per call
     sims.back()->reset(0.0, 0.1 * i, 0.05 * i, 0.0, 0.0, 0.15);
   }
   BatchStepper stepper(sims, 2);
-  std::vector<double> cmd(3 * RoverSim::kCommandSize), out(3 * RoverSim::kObservationSize);
+  std::vector<double> cmd(3 * RoverSim::kCommandSize), out(3 * RoverSim::kStateVectorSize);
   Hash h;
   for (int call = 0; call < 60; ++call) {
     for (int i = 0; i < 3; ++i) {

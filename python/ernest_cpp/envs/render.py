@@ -36,8 +36,8 @@ def render_frame(env) -> np.ndarray:
     side.clear()
     sc = env.core.scenario
     st = env.core.state
-    pos = np.asarray(st["position"])
-    yaw = st["yaw"]
+    pos = np.asarray(st.position)
+    yaw = st.yaw
     h = np.asarray(sc.heights)
     ox, oy = sc.origin
     extent = [ox, ox + sc.spacing * (h.shape[0] - 1), oy, oy + sc.spacing * (h.shape[1] - 1)]
@@ -56,8 +56,8 @@ def render_frame(env) -> np.ndarray:
     top.plot(line[:, 0], line[:, 1], "--", color="tab:blue", lw=1.2, label="desired path")
     traj = np.array([s["position"][:2] for s in getattr(env, "history", [])] or [pos[:2]])
     top.plot(traj[:, 0], traj[:, 1], color="white", lw=1.0)
-    wp = np.asarray(st["wheel_position"])
-    loads = np.asarray(st["wheel_load"])
+    wp = np.asarray(st.wheel_position)
+    loads = np.asarray(st.wheel_load)
     body = np.array([[0.43, 0.4], [0.43, -0.4], [-0.43, -0.4], [-0.43, 0.4], [0.43, 0.4]])
     b = body @ _rot(yaw).T + pos[:2]
     top.plot(b[:, 0], b[:, 1], color="k", lw=1)
