@@ -402,6 +402,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   guesser.reset();
   rigid_deflection.fill(Vec3::Zero());
   obstacle_mode.fill(RowState::Free);
+  obstacle_next = obstacle_mode;  // (see restore())
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);

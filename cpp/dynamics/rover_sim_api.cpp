@@ -205,6 +205,11 @@ void RoverSim::restore(const Snapshot& s) {
     require(m == RowState::Free || m == RowState::Bounded,
             "RoverSim.restore: corrupt snapshot (obstacle_mode)");
   impl_->obstacle_mode = s.obstacle_mode;
+  // A step without obstacle contacts keeps obstacle_next as it was (settle_obstacles is not
+  // called) and then takes it as obstacle_mode: between steps the two are equal, and a restored
+  // (or reset) rover must have them equal too, else its first step off the rocks takes the
+  // guesses of wherever the simulation last was (restored runs parted from the original).
+  impl_->obstacle_next = s.obstacle_mode;
   impl_->pending_force.setZero();
   impl_->diverged = false;
   impl_->start_current = false;

@@ -204,7 +204,8 @@ struct RoverData {
   // (the wheel is the joint's body 1 or 2), its feedback; per wheel whether its points are
   // emitted sticking (Free: friction rows unbounded, checked after the step) or bounded
   // (Bounded: ODE's friction bounded by mu times the normal force), for this step's attempts
-  // (obstacle_try) and as the next step's guess (obstacle_mode, in the Snapshot); points of a
+  // (obstacle_try) and as the next step's guess (obstacle_mode, in the Snapshot; obstacle_next
+  // equals it between steps: a step without contacts keeps it); points of a
   // sticking wheel found carrying no normal force, emitted without friction rows (obstacle_off).
   std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_wheel{};
   std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
