@@ -193,7 +193,7 @@ void bind_envs(py::module_& m) {
       .def_property_readonly("current_action", &RoverEnv::current_action)
       .def_property_readonly("state", [](const RoverEnv& e) { return e.sim().state_copy(); },
                              "ground truth of the rover: dynamics.RoverState (a copy), the type "
-                             "RoverSim.state gives")
+                             "RoverSim.state gives");
 
   py::class_<VecRoverEnv>(m, "VecRoverEnv",
                           "N RoverEnv episodes stepped in parallel (next-step autoreset).")
