@@ -1,5 +1,7 @@
-// Internal to cpp/dynamics: the ODE model behind RoverSim. rover_sim.cpp builds and places it,
-// rover_step.cpp advances it. Not part of the embedding API (no stability promise).
+// Internal to cpp/dynamics: the ODE model behind RoverSim, as a model (RoverModel: built once,
+// never re-created) and its data (RoverData: what a step reads and writes). rover_sim.cpp builds
+// and places it, rover_step.cpp advances it, rover_sim_api.cpp is RoverSim's API over it. Not part
+// of the embedding API (no stability promise).
 #pragma once
 
 #include <ode/ode.h>
