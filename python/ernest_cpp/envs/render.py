@@ -68,7 +68,7 @@ def render_frame(env) -> np.ndarray:
     top.set_xlim(x0, x1)
     top.set_ylim(y0, y1)
     top.set_aspect("equal")
-    top.set_title(f"{sc.name}  t = {st['time']:.1f} s", fontsize=9)
+    top.set_title(f"{sc.name}  t = {st.time:.1f} s", fontsize=9)
     top.legend(loc="upper left", fontsize=7)
     if "cbar" not in _FIG:
         _FIG["cbar"] = fig.colorbar(sca, ax=top, fraction=0.035, label="wheel load [N]")
@@ -83,8 +83,8 @@ def render_frame(env) -> np.ndarray:
     side.set_xlim(-3, 5)
     side.set_ylim(zs.min() - 0.3, max(zs.max(), pos[2]) + 0.6)
     side.set_aspect("equal")
-    side.set_title(f"side view  yaw {math.degrees(st['gimbal_yaw']):+.0f} deg, "
-                   f"roll {math.degrees(st['gimbal_roll']):+.0f} deg", fontsize=9)
+    side.set_title(f"side view  yaw {math.degrees(st.gimbal_yaw):+.0f} deg, "
+                   f"roll {math.degrees(st.gimbal_roll):+.0f} deg", fontsize=9)
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="rgba", dpi=80)
