@@ -150,7 +150,7 @@ int main() {
     std::vector<std::shared_ptr<RoverSim>> sims;  // identical work for both thread counts
     for (int i = 0; i < 8; ++i) sims.push_back(driving(rocks(20, 100 + i), dt, 0.15));
     BatchStepper batch(sims, threads);
-    std::vector<double> obs(8 * RoverSim::kObservationSize);
+    std::vector<double> obs(8 * RoverSim::kStateVectorSize);
     std::vector<double> t;
     for (int k = 0; k < repeats; ++k) {
       const auto t0 = Clock::now();

@@ -332,14 +332,16 @@ void bind_dynamics(py::module_& m) {
       .def_property_readonly("state", &RoverSim::state_copy,
                              "RoverState after the last step (a copy).")
       .def(
-          "observation",
+          "state_vector",
           [](const RoverSim& s) {
-            py::array_t<double> o(RoverSim::kObservationSize);
-            s.observation(o.mutable_data());
+            py::array_t<double> o(RoverSim::kStateVectorSize);
+            s.state_vector(o.mutable_data());
             return o;
           },
-          "Flat observation vector; names in observation_names().")
-      .def_static("observation_names", &RoverSim::observation_names)
+          "The state as STATE_VECTOR_SIZE values (a flat RoverState); names in "
+          "state_vector_names(). Not the policy's observation (sensing.OBSERVATION_SIZE).")
+      .def_static("state_vector_names", &RoverSim::state_vector_names,
+                  "Names of the STATE_VECTOR_SIZE entries of state_vector().")
       .def("snapshot", &RoverSim::snapshot, "Full state; restore() reproduces runs bit for bit.")
       .def("restore", &RoverSim::restore, "snapshot"_a)
       .def("apply_chassis_force", &RoverSim::apply_chassis_force, "force"_a,
@@ -353,7 +355,7 @@ void bind_dynamics(py::module_& m) {
       .def_property_readonly("parameters", &RoverSim::parameters)
       .def_property_readonly("options", &RoverSim::options)
       .def_property_readonly("terrain", &RoverSim::terrain);
-  m.attr("OBSERVATION_SIZE") = RoverSim::kObservationSize;
+  m.attr("STATE_VECTOR_SIZE") = RoverSim::kStateVectorSize;
   m.attr("COMMAND_SIZE") = RoverSim::kCommandSize;
 
   py::class_<BatchStepper>(m, "BatchStepper",
@@ -375,19 +377,19 @@ void bind_dynamics(py::module_& m) {
                                       std::to_string(RoverSim::kCommandSize) + ")");
               cptr = cmd.data();
             }
-            py::array_t<double> obs({n, static_cast<py::ssize_t>(RoverSim::kObservationSize)});
-            double* optr = obs.mutable_data();
+            py::array_t<double> states({n, static_cast<py::ssize_t>(RoverSim::kStateVectorSize)});
+            double* sptr = states.mutable_data();
             {
               py::gil_scoped_release release;
               interruptible scope;  // Ctrl-C: every rover stops after a whole step
-              b.step(cptr, n_steps, optr);
+              b.step(cptr, n_steps, sptr);
             }
-            return obs;
+            return states;
           },
           "commands"_a, "n_steps"_a = 1,
           "commands: (N, 8) rows (w_FL, w_FR, w_RL, w_RR, psi_dot, phi_dot, gimbal_enabled, "
           "clutch_engage) or None to keep them; steps every rover n_steps times; returns the "
-          "(N, OBSERVATION_SIZE) observations.")
+          "(N, STATE_VECTOR_SIZE) state vectors (RoverSim.state_vector()).")
       .def_property_readonly("size", &BatchStepper::size)
       .def_property_readonly("threads", &BatchStepper::threads)
       .def("sim", &BatchStepper::sim_ptr, "i"_a, "The i-th RoverSim.");

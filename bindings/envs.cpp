@@ -191,28 +191,9 @@ void bind_envs(py::module_& m) {
       .def_property_readonly("fts", &RoverEnv::fts, "last processed force–torque values (4 x 6)")
       .def_property_readonly("fts_bias", &RoverEnv::fts_bias)
       .def_property_readonly("current_action", &RoverEnv::current_action)
-      .def_property_readonly("state", [](const RoverEnv& e) {
-        const auto& s = e.sim().state();
-        py::dict d;
-        d["time"] = s.time;
-        d["position"] = s.position;
-        d["quaternion"] = s.quaternion;
-        d["roll"] = s.roll;
-        d["pitch"] = s.pitch;
-        d["yaw"] = s.yaw;
-        d["gimbal_yaw"] = s.gimbal_yaw;
-        d["gimbal_roll"] = s.gimbal_roll;
-        d["roll_torque"] = s.roll_torque;
-        d["yaw_torque"] = s.yaw_torque;
-        Eigen::Matrix<double, 4, 3, Eigen::RowMajor> wp;
-        for (int i = 0; i < 4; ++i) wp.row(i) = s.wheel_position[i].transpose();
-        d["wheel_position"] = wp;
-        d["wheel_load"] = s.wheel_load;
-        d["sinkage"] = s.sinkage;
-        d["wheel_speed"] = s.wheel_speed;
-        d["energy"] = s.energy;
-        return d;
-      }, "ground truth of the rover (dict of numpy values)");
+      .def_property_readonly("state", [](const RoverEnv& e) { return e.sim().state_copy(); },
+                             "ground truth of the rover: dynamics.RoverState (a copy), the type "
+                             "RoverSim.state gives");
 
   py::class_<VecRoverEnv>(m, "VecRoverEnv",
                           "N RoverEnv episodes stepped in parallel (next-step autoreset).")

@@ -34,7 +34,7 @@ std::shared_ptr<RoverSim> BatchStepper::sim_ptr(int i) const {
   return sims_[static_cast<size_t>(i)];
 }
 
-void BatchStepper::step(const double* commands, int n_steps, double* observations) {
+void BatchStepper::step(const double* commands, int n_steps, double* states) {
   const ExclusiveUse busy(in_use_, "BatchStepper.step");
   require(n_steps >= 0, "BatchStepper.step: n_steps must be >= 0");
   for (auto& e : errors_) e = nullptr;
@@ -45,7 +45,7 @@ void BatchStepper::step(const double* commands, int n_steps, double* observation
       RoverSim& s = *sims_[static_cast<size_t>(i)];
       if (commands) s.set_command_vector(commands + i * RoverSim::kCommandSize);
       s.step_n(n_steps);
-      if (observations) s.observation(observations + i * RoverSim::kObservationSize);
+      if (states) s.state_vector(states + i * RoverSim::kStateVectorSize);
     } catch (...) {
       errors_[static_cast<size_t>(i)] = std::current_exception();
     }

@@ -1,4 +1,4 @@
-// Steps N independent rovers on a pool of threads; commands in and observations out as dense
+// Steps N independent rovers on a pool of threads; commands in and state vectors out as dense
 // row-major arrays, one call per batch step (for the environments and the Python bindings).
 #pragma once
 
@@ -29,13 +29,14 @@ class BatchStepper {
   std::shared_ptr<RoverSim> sim_ptr(int i) const;
 
   /// commands: size() x RoverSim::kCommandSize (see RoverSim::set_command_vector), or nullptr to
-  /// keep the current commands; n_steps physics steps for every rover; observations (may be
-  /// nullptr): size() x RoverSim::kObservationSize. If rovers fail, all the others still step;
+  /// keep the current commands; n_steps physics steps for every rover; states (may be nullptr):
+  /// size() x RoverSim::kStateVectorSize (RoverSim::state_vector()). If rovers fail, all the
+  /// others still step;
   /// then the first failure (by rover index) is rethrown, SimulationDiverged naming the rover.
   /// One thread at a time: a second concurrent call throws ConcurrentUse. Interrupted (Ctrl-C
   /// from Python, common/interrupt.hpp): every rover stops after a whole step, possibly after
   /// different numbers of steps (each RoverSim's time says); all stay usable.
-  void step(const double* commands, int n_steps, double* observations);
+  void step(const double* commands, int n_steps, double* states);
 
  private:
   std::vector<std::shared_ptr<RoverSim>> sims_;

@@ -42,17 +42,17 @@ void RoverSim::Impl::prepare_rigid() {
 }
 
 // Whether wheel i's contact is emitted with its friction rows unbounded (guessed sticking).
-bool RoverSim::Impl::rigid_sticking(const std::int8_t* modes, int i) const {
-  return modes && modes[kRowsPerWheel * i + kShearX] == kFree &&
-         modes[kRowsPerWheel * i + kShearY] == kFree;
+bool RoverSim::Impl::rigid_sticking(RowModes modes, int i) const {
+  return modes[kRowsPerWheel * i + kShearX] == RowState::Free &&
+         modes[kRowsPerWheel * i + kShearY] == RowState::Free;
 }
 
 // The step's deflections become the next step's (after the accepted attempt).
 void RoverSim::Impl::commit_rigid() { rigid_deflection = rigid_deflection_end; }
 
-void RoverSim::Impl::emit_rigid(int i, const std::int8_t* modes) {
+void RoverSim::Impl::emit_rigid(int i, RowModes modes) {
   const GroundContact& g = ground[i];
-  if (modes && modes[kRowsPerWheel * i + kNormal] == kAtLo) return;  // guessed not pushing
+  if (modes[kRowsPerWheel * i + kNormal] == RowState::AtLo) return;  // guessed not pushing
   const bool sticking = rigid_sticking(modes, i);
   dContact ct;
   std::memset(&ct, 0, sizeof ct);
@@ -81,21 +81,20 @@ void RoverSim::Impl::emit_rigid(int i, const std::int8_t* modes) {
 // at the end of the step. Returns false if a guess was wrong: a missing contact that the spring
 // would push, or a sticking contact whose normal force is not positive or whose friction exceeds
 // mu times it. A bounded contact is right by construction (Coulomb's law, solve_coulomb).
-bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& vp,
-                                  std::int8_t* next) {
+bool RoverSim::Impl::settle_rigid(int i, RowModes modes, const Vec3& vp, RowStates& next) {
   const GroundContact& g = ground[i];
   const int r = kRowsPerWheel * i;
-  if (modes && modes[r + kNormal] == kAtLo) {
+  if (modes[r + kNormal] == RowState::AtLo) {
     const double push = contact_erp * g.depth / h - vp.dot(g.n);
-    next[r + kNormal] = push > 0.0 ? kFree : kAtLo;
-    next[r + kShearX] = next[r + kShearY] = kFree;
+    next[r + kNormal] = push > 0.0 ? RowState::Free : RowState::AtLo;
+    next[r + kShearX] = next[r + kShearY] = RowState::Free;
     rigid_deflection_end[i].setZero();  // no contact: the tyre relaxes
     return push <= 0.0;
   }
   const Vec3 f = to_vec(ground_fb[i].f1);
   const double fn = f.dot(g.n);
   row_force[r + kNormal] = fn;
-  next[r + kNormal] = fn > 0.0 ? kFree : kAtLo;
+  next[r + kNormal] = fn > 0.0 ? RowState::Free : RowState::AtLo;
   const double cap = mu * std::max(fn, 0.0);
   bool inside = true;
   Vec3 d_end = Vec3::Zero();
@@ -105,13 +104,13 @@ bool RoverSim::Impl::settle_rigid(int i, const std::int8_t* modes, const Vec3& v
     const double d = rigid_deflection[i].dot(dir), v = vp.dot(dir);
     const double lambda = f.dot(dir);
     const double law = (-tangential_erp[k] / h * d - v) / tangential_cfm[k];  // unclamped force
-    const std::int8_t status = status_of(law, cap);
+    const RowState status = status_of(law, cap);
     row_force[row] = lambda;
     next[row] = status;
     inside = inside && std::abs(lambda) <= cap;
     // Sticking: the deflection grows by the step's slip; sliding: it carries the friction force.
     const double k_t = k == 0 ? opt.rigid_tyre_stiffness_x : opt.rigid_tyre_stiffness_y;
-    d_end += dir * (status == kFree ? d + h * v : k_t > 0.0 ? -lambda / k_t : 0.0);
+    d_end += dir * (status == RowState::Free ? d + h * v : k_t > 0.0 ? -lambda / k_t : 0.0);
   }
   rigid_deflection_end[i] = d_end;
   // The check is exact: |lambda| <= mu F_n, as Coulomb's law.
@@ -130,12 +129,12 @@ using namespace detail;
 // system for the sparse solver (ode_lcp.cpp) instead of ODE's pivoting with findex; a point of
 // such a wheel found carrying no normal force is emitted without friction rows (obstacle_off);
 // a wheel whose guess fails is emitted as before, ODE's contact with its friction bounded by mu
-// times the normal force. modes == nullptr (every row with its bounds): all bounded.
-void RoverSim::Impl::emit_obstacles(const std::int8_t* modes) {
+// times the normal force. modes: every row with its bounds (RowModes::all_bounded()): all bounded.
+void RoverSim::Impl::emit_obstacles(RowModes modes) {
   for (int k = 0; k < n_obstacle_contacts; ++k) {
     const int w = obstacle_wheel[k];
-    const bool sticking =
-        modes && w >= 0 && obstacle_try[w] == kFree && opt.guess_obstacle_contacts;
+    const bool sticking = modes.guessed() && w >= 0 && obstacle_try[w] == RowState::Free &&
+                          opt.guess_obstacle_contacts;
     dContact c = obstacle_contact[k];
     if (sticking) {
       c.surface.mode &= ~dContactApprox1;
@@ -153,7 +152,7 @@ void RoverSim::Impl::emit_obstacles(const std::int8_t* modes) {
 // guess is corrected for the next attempt: unloaded points lose their friction rows, and a wheel
 // with a point beyond its friction cap, or an unloaded point that pushes, is bounded. Each
 // correction adds an off point or a bounded wheel, so the attempts end.
-bool RoverSim::Impl::settle_obstacles(const std::int8_t* modes) {
+bool RoverSim::Impl::settle_obstacles(RowModes modes) {
   std::array<bool, 4> inside{true, true, true, true}, bound_it{};
   std::uint64_t off = obstacle_off;
   for (int k = 0; k < n_obstacle_contacts; ++k) {
@@ -167,7 +166,8 @@ bool RoverSim::Impl::settle_obstacles(const std::int8_t* modes) {
     const double fn = side * f.dot(to_vec(c.geom.normal));
     const double cap = mu * std::max(fn, 0.0);
     const double l1 = std::abs(f.dot(to_vec(t1))), l2 = std::abs(f.dot(to_vec(t2)));
-    const bool guessed = modes && obstacle_try[w] == kFree && opt.guess_obstacle_contacts;
+    const bool guessed =
+        modes.guessed() && obstacle_try[w] == RowState::Free && opt.guess_obstacle_contacts;
     if (fn > 0.0 && guessed && !(l1 < cap && l2 < cap)) inside[w] = false;
     if (fn > 0.0 && !guessed) {
       // Bounded: sliding is read from the slip velocity (the row's law, lambda = -v_t / slip,
@@ -190,9 +190,9 @@ bool RoverSim::Impl::settle_obstacles(const std::int8_t* modes) {
   }
   bool held = off == obstacle_off;
   for (int w = 0; w < 4; ++w) {
-    obstacle_next[w] = inside[w] ? kFree : kBounded;
+    obstacle_next[w] = inside[w] ? RowState::Free : RowState::Bounded;
     if (bound_it[w]) {
-      obstacle_try[w] = kBounded;
+      obstacle_try[w] = RowState::Bounded;
       held = false;
     }
   }

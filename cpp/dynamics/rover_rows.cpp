@@ -24,8 +24,8 @@ RoverSim::Impl::DriveRow RoverSim::Impl::drive_row(int k) const {
 // below by zero: the sparse solver (ode_lcp.cpp) solves it exactly whether it pushes or not, so
 // it needs no guess of its own. A normal force guessed at zero (the wheel leaving the soil
 // faster than F_z / c) keeps the row slack if shear rows need the contact.
-void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3& tw) {
-  const auto mode_of = [&](int row) { return modes ? modes[row] : kBounded; };
+void RoverSim::Impl::emit_ground(int i, RowModes modes, Vec3& fw, Vec3& tw) {
+  const auto mode_of = [&](int row) { return modes[row]; };
   const bool soft = opt.ground == GroundType::Soil;
   struct Slot {
     Vec3 dir;
@@ -75,7 +75,7 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
   //     soil's damper plus h dF_z/dz (eq 32's spring at the end of the step, linearised: see
   //     prepare_ground). Guessed at 0 (the wheel leaves the soil faster than F_z / c): no row.
   const double c = g.normal_damping;
-  const std::int8_t normal_mode = mode_of(kRowsPerWheel * i + kNormal);
+  const RowState normal_mode = mode_of(kRowsPerWheel * i + kNormal);
   Slot slots[2];  // x then y: with fdir1 = x the second friction row is n × x = y
   int ns = 0;
   // (a) Shear rows: at a guessed bound, explicit forces at the patch.
@@ -83,21 +83,21 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
     const double bound = k == 0 ? g.ax : g.ay;
     if (bound < kMinRowBound) continue;
     const Vec3& dir = k == 0 ? g.fx : g.fy;
-    const std::int8_t mode = mode_of(kRowsPerWheel * i + (k == 0 ? kShearX : kShearY));
-    if (mode == kAtHi || mode == kAtLo) {
-      add_at(fw, tw, dir * (mode == kAtHi ? bound : -bound), g.arm);
+    const RowState mode = mode_of(kRowsPerWheel * i + (k == 0 ? kShearX : kShearY));
+    if (mode == RowState::AtHi || mode == RowState::AtLo) {
+      add_at(fw, tw, dir * (mode == RowState::AtHi ? bound : -bound), g.arm);
       continue;
     }
     const double slip = (k == 0 ? opt.soil.eps_contact_x : opt.soil.eps_contact_y) / bound;
-    slots[ns++] = Slot{dir, mode == kFree ? dInfinity : bound, slip, 0.0};
+    slots[ns++] = Slot{dir, mode == RowState::Free ? dInfinity : bound, slip, 0.0};
   }
-  if (normal_mode != kAtLo || ns > 0)
-    make(g.n, normal_mode != kAtLo ? g.fz / c : -kSlackSpeed, 1.0 / c, slots, ns, &ground_fb[i]);
+  if (normal_mode != RowState::AtLo || ns > 0)
+    make(g.n, normal_mode != RowState::AtLo ? g.fz / c : -kSlackSpeed, 1.0 / c, slots, ns, &ground_fb[i]);
   // (b) Compaction row on the wheel centre.
   if (g.comp > 0.0) {
-    const std::int8_t mode = mode_of(kRowsPerWheel * i + kCompaction);
-    if (mode == kAtHi || mode == kAtLo) {
-      fw += g.fx * (mode == kAtHi ? g.comp : -g.comp);
+    const RowState mode = mode_of(kRowsPerWheel * i + kCompaction);
+    if (mode == RowState::AtHi || mode == RowState::AtLo) {
+      fw += g.fx * (mode == RowState::AtHi ? g.comp : -g.comp);
     } else {
       const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
       dJointID lm = dJointCreateLMotor(world, contacts);
@@ -105,27 +105,27 @@ void RoverSim::Impl::emit_ground(int i, const std::int8_t* modes, Vec3& fw, Vec3
       dJointSetLMotorNumAxes(lm, 1);
       dJointSetLMotorAxis(lm, 0, 0, g.fx.x(), g.fx.y(), g.fx.z());
       dJointSetLMotorParam(lm, dParamVel, 0.0);
-      dJointSetLMotorParam(lm, dParamFMax, mode == kFree ? dInfinity : g.comp);
+      dJointSetLMotorParam(lm, dParamFMax, mode == RowState::Free ? dInfinity : g.comp);
       dJointSetLMotorParam(lm, dParamCFM, eps_dir / g.comp);
     }
   }
 }
 
-// Joints and forces of one attempt. modes == nullptr: every guessed row with its bounds.
-void RoverSim::Impl::emit(const std::int8_t* modes) {
+// Joints and forces of one attempt (modes: a guess, or every guessed row with its bounds).
+void RoverSim::Impl::emit(RowModes modes) {
   std::array<Vec3, 6> f = base_force, t = base_torque;
-  const auto mode_of = [&](int row) { return modes ? modes[row] : kBounded; };
+  const auto mode_of = [&](int row) { return modes[row]; };
   // ---- drives
   for (int k = 0; k < 6; ++k) {
     const MotorRow& m = motor[k];
     const DriveRow d = drive_row(k);
     const int row = d.row;
-    const std::int8_t mode = m.bound > 0.0 ? mode_of(row) : kBounded;
+    const RowState mode = m.bound > 0.0 ? mode_of(row) : RowState::Bounded;
     double fmax = m.bound;
-    if (mode == kFree) fmax = dInfinity;
-    if (mode == kAtHi || mode == kAtLo) {
+    if (mode == RowState::Free) fmax = dInfinity;
+    if (mode == RowState::AtHi || mode == RowState::AtLo) {
       fmax = 0.0;
-      const double lambda = mode == kAtHi ? m.bound : -m.bound;
+      const double lambda = mode == RowState::AtHi ? m.bound : -m.bound;
       t[d.body1] += d.axis * lambda;
       t[d.body2] -= d.axis * lambda;
     }
@@ -154,12 +154,11 @@ void RoverSim::Impl::emit(const std::int8_t* modes) {
 // After dWorldStep: the force of every guessed row and where its law puts it (next[]); returns
 // whether every guess held. The laws are evaluated with the Jacobians of the start of the step
 // (as ODE built them) and the velocities at its end.
-bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
+bool RoverSim::Impl::settle(RowModes modes, RowStates& next) {
   bool held = true;
-  const auto mode_of = [&](int row) { return modes ? modes[row] : kBounded; };
-  const auto outcome = [&](int row, std::int8_t status) {
-    const std::int8_t m = mode_of(row);
-    if (m != kBounded && m != status) held = false;
+  const auto mode_of = [&](int row) { return modes[row]; };
+  const auto outcome = [&](int row, RowState status) {
+    if (!guess_holds(mode_of(row), status)) held = false;
     next[row] = status;
   };
   // ---- drives
@@ -170,20 +169,21 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
     row_force[row] = 0.0;
     if (!(m.bound > 0.0)) continue;
     const Vec3& axis = d.axis;
-    const std::int8_t mode = mode_of(row);
-    if (mode == kAtHi || mode == kAtLo) {
+    const RowState mode = mode_of(row);
+    if (mode == RowState::AtHi || mode == RowState::AtLo) {
       const double rate = (to_vec(dBodyGetAngularVel(body[d.body1])) -
                            to_vec(dBodyGetAngularVel(body[d.body2]))).dot(axis);
       const double demand = (m.target - rate) / kWorldCfm;  // the row's unclamped force
-      row_force[row] = mode == kAtHi ? m.bound : -m.bound;
-      outcome(row, status_of(demand, m.bound) == mode ? mode : kFree);
+      row_force[row] = mode == RowState::AtHi ? m.bound : -m.bound;
+      outcome(row, status_of(demand, m.bound) == mode ? mode : RowState::Free);
     } else {
       const dJointFeedback& fb = k < 4 ? wheel_motor_fb[k] : gimbal_motor_fb;
       const double lambda = to_vec(fb.t1).dot(axis);
       row_force[row] = std::clamp(lambda, -m.bound, m.bound);
       // A bounded row that ODE left at its bound is at it; a free row beyond it is not free.
-      outcome(row, mode == kBounded ? (std::abs(lambda) < m.bound ? kFree : status_of(lambda, m.bound))
-                                    : status_of(lambda, m.bound));
+      outcome(row, mode == RowState::Bounded
+                       ? (std::abs(lambda) < m.bound ? RowState::Free : status_of(lambda, m.bound))
+                       : status_of(lambda, m.bound));
     }
   }
   // ---- ground
@@ -200,14 +200,14 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
     }
     {  // normal force >= 0, F_z - c v_n at the patch: the contact's row, or none (guessed at 0)
       const int row = kRowsPerWheel * i + kNormal;
-      const std::int8_t mode = mode_of(row);
-      if (mode != kAtLo) {  // the contact's normal row, solved with its bound
+      const RowState mode = mode_of(row);
+      if (mode != RowState::AtLo) {  // the contact's normal row, solved with its bound
         row_force[row] = to_vec(ground_fb[i].f1).dot(g.n);
-        next[row] = row_force[row] > 0.0 ? kFree : kAtLo;
+        next[row] = row_force[row] > 0.0 ? RowState::Free : RowState::AtLo;
       } else {
         const double total = g.fz - g.normal_damping * vp.dot(g.n);
         row_force[row] = 0.0;
-        outcome(row, total > 0.0 ? kFree : kAtLo);
+        outcome(row, total > 0.0 ? RowState::Free : RowState::AtLo);
       }
     }
     const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
@@ -222,9 +222,9 @@ bool RoverSim::Impl::settle(const std::int8_t* modes, std::int8_t* next) {
     for (const SoftRow& r : rows) {
       if (!(r.bound > 0.0)) continue;
       const int row = kRowsPerWheel * i + r.kind;
-      const std::int8_t mode = mode_of(row);
-      row_force[row] = mode == kAtHi ? r.bound
-                       : mode == kAtLo ? -r.bound
+      const RowState mode = mode_of(row);
+      row_force[row] = mode == RowState::AtHi ? r.bound
+                       : mode == RowState::AtLo ? -r.bound
                                        : std::clamp(r.u, -r.bound, r.bound);
       outcome(row, status_of(r.u, r.bound));
     }

@@ -1,4 +1,5 @@
-// ERNEST on ODE: model building, placement and the public API; the step is in rover_step.cpp.
+// ERNEST on ODE: ODE set-up, model building and placement; the public API is in rover_sim_api.cpp,
+// the step in rover_step.cpp.
 // Equation numbers refer to seed 004.
 #include "ernest/dynamics/rover_sim.hpp"
 
@@ -11,8 +12,6 @@
 #include <mutex>
 #include <random>
 
-#include "ernest/common/exclusive_use.hpp"
-#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/dynamics/rover_sim_impl.hpp"
 
@@ -171,8 +170,10 @@ void Commands::validate() const {
   require_in_range(o, "roll_torque", roll_torque, -kMaxCommandTorque, kMaxCommandTorque);
 }
 
-RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
-                     const std::vector<BoxObstacle>& obstacles, const SimOptions& options)
+namespace detail {
+
+RoverModel::RoverModel(const RoverParameters& params, const HeightMap& terrain,
+                       const std::vector<BoxObstacle>& obstacles, const SimOptions& options)
     : p(params), hm(terrain), boxes(obstacles), opt(options),
       // sign(v_x) exact in the model: its regularisation is the compaction row's (rover_step.cpp)
       soil([&] {
@@ -180,9 +181,13 @@ RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
         s.eps_direction = 0.0;
         return s;
       }(), soil::WheelGeometry{params.wheel_radius, params.wheel_width},
-           options.soil_points_per_panel) {}
+           options.soil_points_per_panel),
+      mu([&] {
+        std::mt19937_64 rng(options.seed);
+        return options.friction >= 0.0 ? options.friction : options.rigid.sample_friction(rng);
+      }()) {}
 
-RoverSim::Impl::~Impl() {
+RoverModel::~RoverModel() {
   if (contacts) dJointGroupDestroy(contacts);
   if (rover_space) dSpaceDestroy(rover_space);  // destroys its geoms (cleanup on by default)
   if (obstacle_space) dSpaceDestroy(obstacle_space);
@@ -192,6 +197,12 @@ RoverSim::Impl::~Impl() {
   }
   if (threading) dThreadingFreeImplementation(threading);
 }
+
+}  // namespace detail
+
+RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
+                     const std::vector<BoxObstacle>& obstacles, const SimOptions& options)
+    : RoverModel(params, terrain, obstacles, options) {}
 
 void RoverSim::Impl::build() {
   init_ode_once();
@@ -213,8 +224,6 @@ void RoverSim::Impl::build() {
   obstacle_space = dSimpleSpaceCreate(nullptr);
   contacts = dJointGroupCreate(0);
 
-  std::mt19937_64 rng(opt.seed);
-  mu = opt.friction >= 0.0 ? opt.friction : opt.rigid.sample_friction(rng);
   lcp.exact_friction = opt.ground == GroundType::Rigid;  // Coulomb's cap for sliding tyres
   // On soil the rocks' sliding contacts: Coulomb's cap in the sparse path (issue 17).
   lcp.coulomb_friction = opt.ground == GroundType::Soil && opt.guess_obstacle_contacts;
@@ -362,11 +371,10 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   shear_x.fill(0.0);
   shear_y.fill(0.0);
   compaction.fill(0.0);
-  row_mode.fill(kFree);
-  row_mode_before.fill(kFree);
-  alternating = false;
+  guesser.reset();
   rigid_deflection.fill(Vec3::Zero());
-  obstacle_mode.fill(kFree);
+  obstacle_mode.fill(RowState::Free);
+  obstacle_next = obstacle_mode;  // (see restore())
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);
@@ -374,239 +382,5 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   diverged = false;
   callback_error = nullptr;
 }
-
-// ---------------------------------------------------------------------------------------------
-
-RoverSim::RoverSim(const RoverParameters& params, const HeightMap& terrain,
-                   const std::vector<BoxObstacle>& obstacles, const SimOptions& options) {
-  params.validate();
-  options.validate();
-  for (const auto& b : obstacles) b.validate();
-  impl_ = std::make_unique<Impl>(params, terrain, obstacles, options);
-  impl_->build();
-  reset(0.0, 0.0, 0.0);
-}
-
-RoverSim::~RoverSim() = default;
-
-void RoverSim::reset(double x, double y, double heading, double psi, double phi, double speed) {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.reset");
-  require_finite("RoverSim.reset", "x", x);
-  require_finite("RoverSim.reset", "y", y);
-  require_finite("RoverSim.reset", "heading", heading);
-  require_in_range("RoverSim.reset", "psi", psi, -impl_->p.yaw_limit, impl_->p.yaw_limit);
-  require_in_range("RoverSim.reset", "phi", phi, -impl_->p.roll_limit, impl_->p.roll_limit);
-  init_ode_once();
-  require_in_range("RoverSim.reset", "speed", speed, -5.0, 5.0);
-  impl_->run_ode([&] {
-    impl_->place(x, y, heading, psi, phi, speed);
-    impl_->read_outputs(0.0);
-  });
-}
-
-void RoverSim::set_commands(const Commands& c) {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.set_commands");
-  c.validate();
-  impl_->cmd = c;
-}
-
-const Commands& RoverSim::commands() const { return impl_->cmd; }
-
-void RoverSim::set_command_vector(const double* c) {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.set_command_vector");
-  // the flags are 0 or 1: a NaN compares != 0 and would read as true (issue 18)
-  // messages built only on failure: this runs every step of a batch
-  if (!(c[6] == 0.0 || c[6] == 1.0))
-    throw std::invalid_argument("RoverSim commands: gimbal_enabled (column 6) = " +
-                                std::to_string(c[6]) + " must be 0 or 1");
-  if (!(c[7] == 0.0 || c[7] == 1.0))
-    throw std::invalid_argument("RoverSim commands: clutch_engage (column 7) = " +
-                                std::to_string(c[7]) + " must be 0 or 1");
-  Commands k = impl_->cmd;
-  k.wheel_mode = k.yaw_mode = k.roll_mode = ActuatorMode::Velocity;
-  for (int i = 0; i < 4; ++i) k.wheel_speed[i] = c[i];
-  k.yaw_rate = c[4];
-  k.roll_rate = c[5];
-  k.gimbal_enabled = c[6] != 0.0;
-  k.clutch_engage = c[7] != 0.0;
-  k.validate();
-  impl_->cmd = k;
-}
-
-void RoverSim::step() {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.step");
-  impl_->run_ode([&] { impl_->step(); });
-}
-
-void RoverSim::step_n(int n) {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.step_n");
-  require(n >= 0, "RoverSim.step_n: n must be >= 0");
-  impl_->run_ode([&] {
-    for (int k = 0; k < n; ++k) {
-      if (k > 0) poll_interrupt();  // Ctrl-C: stop between whole steps (common/interrupt.hpp)
-      impl_->step();
-    }
-  });
-}
-
-const RoverState& RoverSim::state() const { return impl_->st; }
-
-RoverState RoverSim::state_copy() const {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.state");
-  return impl_->st;
-}
-
-std::vector<std::string> RoverSim::observation_names() {
-  std::vector<std::string> n = {"time", "x", "y", "z", "qw", "qx", "qy", "qz", "vx", "vy", "vz",
-                                "wx", "wy", "wz", "roll", "pitch", "yaw", "gimbal_yaw",
-                                "gimbal_roll", "gimbal_yaw_rate", "gimbal_roll_rate", "yaw_torque",
-                                "roll_torque"};
-  const char* w[4] = {"FL", "FR", "RL", "RR"};
-  for (auto s : w) n.push_back(std::string("wheel_speed_") + s);
-  for (auto s : w) n.push_back(std::string("wheel_torque_") + s);
-  const char* c[6] = {"Fx", "Fy", "Fz", "Tx", "Ty", "Tz"};
-  for (auto s : w)
-    for (auto k : c) n.push_back(std::string("fts_") + s + "_" + k);
-  for (auto s : w) n.push_back(std::string("wheel_load_") + s);
-  for (auto s : w) n.push_back(std::string("sinkage_") + s);
-  n.push_back("energy");
-  n.push_back("clutch");
-  return n;
-}
-
-void RoverSim::observation(double* o) const {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.observation");
-  const RoverState& s = impl_->st;
-  int k = 0;
-  o[k++] = s.time;
-  for (int i = 0; i < 3; ++i) o[k++] = s.position[i];
-  for (int i = 0; i < 4; ++i) o[k++] = s.quaternion[i];
-  for (int i = 0; i < 3; ++i) o[k++] = s.linear_velocity[i];
-  for (int i = 0; i < 3; ++i) o[k++] = s.angular_velocity[i];
-  o[k++] = s.roll;
-  o[k++] = s.pitch;
-  o[k++] = s.yaw;
-  o[k++] = s.gimbal_yaw;
-  o[k++] = s.gimbal_roll;
-  o[k++] = s.gimbal_yaw_rate;
-  o[k++] = s.gimbal_roll_rate;
-  o[k++] = s.yaw_torque;
-  o[k++] = s.roll_torque;
-  for (int i = 0; i < 4; ++i) o[k++] = s.wheel_speed[i];
-  for (int i = 0; i < 4; ++i) o[k++] = s.wheel_torque[i];
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 6; ++j) o[k++] = s.fts[i][j];
-  for (int i = 0; i < 4; ++i) o[k++] = s.wheel_load[i];
-  for (int i = 0; i < 4; ++i) o[k++] = s.sinkage[i];
-  o[k++] = s.energy;
-  o[k++] = static_cast<double>(static_cast<int>(s.clutch));
-}
-
-Snapshot RoverSim::snapshot() const {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.snapshot");
-  Snapshot s;
-  for (int b = 0; b < 6; ++b) {
-    const dBodyID id = impl_->body[b];
-    const dReal* x = dBodyGetPosition(id);
-    const dReal* q = dBodyGetQuaternion(id);
-    const dReal* v = dBodyGetLinearVel(id);
-    const dReal* w = dBodyGetAngularVel(id);
-    for (int k = 0; k < 3; ++k) {
-      s.bodies[b].pos[k] = x[k];
-      s.bodies[b].lin[k] = v[k];
-      s.bodies[b].ang[k] = w[k];
-    }
-    for (int k = 0; k < 4; ++k) s.bodies[b].quat[k] = q[k];
-  }
-  s.state = impl_->st;
-  s.commands = impl_->cmd;
-  s.shear_x = impl_->shear_x;
-  s.shear_y = impl_->shear_y;
-  s.compaction = impl_->compaction;
-  s.row_mode = impl_->row_mode;
-  s.row_mode_before = impl_->row_mode_before;
-  s.alternating = impl_->alternating;
-  for (int i = 0; i < 4; ++i)
-    for (int k = 0; k < 3; ++k) s.rigid_deflection[i][k] = impl_->rigid_deflection[i][k];
-  s.obstacle_mode = impl_->obstacle_mode;
-  impl_->lcp.save(s.solver_patterns);
-  s.valid = true;
-  return s;
-}
-
-void RoverSim::restore(const Snapshot& s) {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.restore");
-  impl_->run_ode([] {});  // refuses after an ODE internal error
-  require(s.valid, "RoverSim.restore: empty snapshot");
-  init_ode_once();
-  impl_->lcp.load(s.solver_patterns);  // first: it may throw on a corrupt snapshot
-  for (int b = 0; b < 6; ++b) {
-    const dBodyID id = impl_->body[b];
-    const auto& sb = s.bodies[b];
-    dQuaternion q = {sb.quat[0], sb.quat[1], sb.quat[2], sb.quat[3]};
-    dBodySetPosition(id, sb.pos[0], sb.pos[1], sb.pos[2]);
-    dBodySetQuaternion(id, q);
-    dBodySetLinearVel(id, sb.lin[0], sb.lin[1], sb.lin[2]);
-    dBodySetAngularVel(id, sb.ang[0], sb.ang[1], sb.ang[2]);
-    dBodySetForce(id, 0, 0, 0);
-    dBodySetTorque(id, 0, 0, 0);
-  }
-  impl_->st = s.state;
-  impl_->cmd = s.commands;
-  impl_->shear_x = s.shear_x;
-  impl_->shear_y = s.shear_y;
-  impl_->compaction = s.compaction;
-  impl_->row_mode = s.row_mode;
-  impl_->row_mode_before = s.row_mode_before;
-  impl_->alternating = s.alternating;
-  for (int i = 0; i < 4; ++i)
-    for (int k = 0; k < 3; ++k) impl_->rigid_deflection[i][k] = s.rigid_deflection[i][k];
-  for (std::int8_t m : s.obstacle_mode)
-    require(m == kFree || m == kBounded, "RoverSim.restore: corrupt snapshot (obstacle_mode)");
-  impl_->obstacle_mode = s.obstacle_mode;
-  impl_->pending_force.setZero();
-  impl_->diverged = false;
-  impl_->start_current = false;
-}
-
-void RoverSim::apply_chassis_force(const Eigen::Vector3d& force) {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.apply_chassis_force");
-  require(force.allFinite(), "RoverSim.apply_chassis_force: force must be finite");
-  impl_->pending_force += force;
-}
-
-double RoverSim::kinetic_energy() const {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.kinetic_energy");
-  double e = 0.0;
-  for (auto b : impl_->body) {
-    dMass m;
-    dBodyGetMass(b, &m);
-    const Vec3 v = to_vec(dBodyGetLinearVel(b));
-    const Mat3 r = to_mat(dBodyGetRotation(b));
-    const Vec3 wl = r.transpose() * to_vec(dBodyGetAngularVel(b));
-    Mat3 inertia;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) inertia(i, j) = m.I[4 * i + j];
-    e += 0.5 * m.mass * v.squaredNorm() + 0.5 * wl.dot(inertia * wl);
-  }
-  return e;
-}
-
-double RoverSim::potential_energy() const {
-  const ExclusiveUse busy(impl_->in_use, "RoverSim.potential_energy");
-  double e = 0.0;
-  for (auto b : impl_->body) {
-    dMass m;
-    dBodyGetMass(b, &m);
-    e += m.mass * impl_->opt.soil.gravity * dBodyGetPosition(b)[2];
-  }
-  return e;
-}
-
-const SolverStats& RoverSim::solver_stats() const { return impl_->stats; }
-double RoverSim::friction() const { return impl_->mu; }
-const RoverParameters& RoverSim::parameters() const { return impl_->p; }
-const SimOptions& RoverSim::options() const { return impl_->opt; }
-const HeightMap& RoverSim::terrain() const { return impl_->hm; }
 
 }  // namespace ernest::dynamics

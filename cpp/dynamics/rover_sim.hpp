@@ -163,6 +163,13 @@ struct RoverState {
 /// gimbal's yaw and roll drives.
 inline constexpr int kGuessedRowCount = 22;
 
+/// Where a bounded row (or a wheel's obstacle contacts) was guessed or found to be: inside its
+/// bounds (solved as an unbounded row: factorised with the joints instead of pivoted), at its
+/// upper or lower bound (applied as the explicit force at that bound), or left to ODE with its
+/// bounds (Bounded: ODE's pivoting solver places it). Obstacle contacts use Free (sticking,
+/// friction rows unbounded) and Bounded (friction bounded by mu times the normal force).
+enum class RowState : std::int8_t { Free = 0, AtHi = 1, AtLo = 2, Bounded = 3 };
+
 /// How the constraint solver's active-set guesses fared (benchmarks, tests).
 struct SolverStats {
   std::uint64_t steps = 0;         ///< physics steps taken since construction
@@ -205,12 +212,12 @@ struct Snapshot {
   std::array<double, 4> shear_x{}, shear_y{};  // implicit shear levels of the last step
   std::array<double, 4> compaction{};          // implicit compaction force of the last step
   // active-set outcomes of the last two steps (guesses for the next)
-  std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
+  std::array<RowState, kGuessedRowCount> row_mode{}, row_mode_before{};
   bool alternating = false;
   /// Tangential deflection of each tyre on rigid ground (world, m; cpp/dynamics/rover_rigid.cpp).
   std::array<std::array<double, 3>, 4> rigid_deflection{};
-  /// Each wheel's obstacle contacts guessed sticking (0) or bounded (3) (rover_rigid.cpp).
-  std::array<std::int8_t, 4> obstacle_mode{};
+  /// Each wheel's obstacle contacts guessed sticking (Free) or bounded (rover_rigid.cpp).
+  std::array<RowState, 4> obstacle_mode{};
   /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
   /// of the steps that follow; internal layout, see cpp/dynamics/ode_lcp.hpp).
   std::vector<std::uint64_t> solver_patterns;
@@ -224,7 +231,9 @@ struct Snapshot {
 /// further step, reset and restore: create a new one.
 class RoverSim {
  public:
-  static constexpr int kObservationSize = 65;
+  /// The rover's state as a flat vector (state_vector()): kStateVectorSize values. Not the
+  /// policy's observation (45 values, cpp/sensing/observation.hpp, layout ernest-obs-v2).
+  static constexpr int kStateVectorSize = 65;
   static constexpr int kCommandSize = 8;
 
   RoverSim(const RoverParameters& params, const HeightMap& terrain,
@@ -254,9 +263,9 @@ class RoverSim {
   const RoverState& state() const;
   /// A copy of state(), taken under the one-thread-at-a-time rule (for the Python binding).
   RoverState state_copy() const;
-  /// Fixed layout of kObservationSize values; names from observation_names().
-  void observation(double* out) const;
-  static std::vector<std::string> observation_names();
+  /// state() as kStateVectorSize values in a fixed layout; names from state_vector_names().
+  void state_vector(double* out) const;
+  static std::vector<std::string> state_vector_names();
 
   Snapshot snapshot() const;
   void restore(const Snapshot& s);

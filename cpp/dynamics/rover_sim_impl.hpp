@@ -1,5 +1,7 @@
-// Internal to cpp/dynamics: the ODE model behind RoverSim. rover_sim.cpp builds and places it,
-// rover_step.cpp advances it. Not part of the embedding API (no stability promise).
+// Internal to cpp/dynamics: the ODE model behind RoverSim, as a model (RoverModel: built once,
+// never re-created) and its data (RoverData: what a step reads and writes). rover_sim.cpp builds
+// and places it, rover_step.cpp advances it, rover_sim_api.cpp is RoverSim's API over it. Not part
+// of the embedding API (no stability promise).
 #pragma once
 
 #include <ode/ode.h>
@@ -17,6 +19,7 @@
 
 #include "ernest/dynamics/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
 #include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/dynamics/row_guess.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/soil/bekker_wong.hpp"
 
@@ -59,11 +62,7 @@ enum RowKind : int { kShearX = 0, kShearY = 1, kCompaction = 2, kWheelMotor = 3,
 constexpr int kRowsPerWheel = 5;
 constexpr int kYawMotor = 4 * kRowsPerWheel, kRollMotor = kYawMotor + 1;
 static_assert(kGuessedRowCount == kRollMotor + 1, "Snapshot::row_mode covers every guessed row");
-/// Guess for a bounded row: inside its bounds (solved as an unbounded row, hence factorised with
-/// the joints instead of pivoted), or at its upper / lower bound (applied as an explicit force).
-constexpr std::int8_t kFree = 0, kAtHi = 1, kAtLo = 2;
-constexpr std::int8_t kBounded = 3;  // emit the row with its bounds and let ODE pivot
-constexpr int kMaxGuesses = 3;       // guesses of a step before failing rows are bounded
+// (a guess per row: RowState, rover_sim.hpp; the guesser: row_guess.hpp)
 // Below 1 mN a soil row is dropped: a CFM of eps / F would overflow the LCP as F -> 0.
 constexpr double kMinRowBound = 1e-3;
 constexpr double kSlackSpeed = 100.0;  // [m/s] a normal row aiming at -100 m/s never engages
@@ -72,11 +71,6 @@ constexpr int kMaxSlipSolves = 12;
 constexpr double kSlipTolerance = 2e-3;  // slips this close to eq 12's end value: accepted
 
 inline double clamp_unit(double v) { return std::min(1.0, std::max(-1.0, v)); }
-
-// Where a soft row's law lambda = u puts it for bounds +-bound.
-inline std::int8_t status_of(double u, double bound) {
-  return u >= bound ? kAtHi : (u <= -bound ? kAtLo : kFree);
-}
 
 // A force at a point: added to a body's force and, about its centre of mass (arm from it), its
 // torque.
@@ -107,24 +101,28 @@ struct MotorRow {
   double target = 0.0, bound = 0.0;
 };
 
-}  // namespace detail
+// The model (pinocchio's Model): what RoverSim is built from and what build() creates once. The
+// values are const. The ODE objects are mutable by nature (ODE's API takes them non-const, a step
+// moves the bodies and sets the drives' parameters), but the model is their set: build() creates
+// every body, geom and joint, and no step creates or destroys one (a step's contact joints live in
+// `contacts`, a joint group emptied after every attempt, never re-created). Destroyed with it.
+struct RoverModel {
+  RoverModel(const RoverParameters& params, const HeightMap& terrain,
+             const std::vector<BoxObstacle>& obstacles, const SimOptions& options);
+  ~RoverModel();
+  RoverModel(const RoverModel&) = delete;
+  RoverModel& operator=(const RoverModel&) = delete;
 
-struct RoverSim::Impl {
-  using Vec3 = detail::Vec3;
-  using Mat3 = detail::Mat3;
+  const RoverParameters p;
+  const HeightMap hm;
+  const std::vector<BoxObstacle> boxes;
+  const SimOptions opt;
+  const soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels: ODE's rows
+  // Coulomb friction of the obstacles and of rigid ground: opt.friction, or drawn once from
+  // opt.rigid with opt.seed.
+  const double mu;
 
-  RoverParameters p;
-  HeightMap hm;
-  std::vector<BoxObstacle> boxes;
-  SimOptions opt;
-  soil::BekkerWongModel soil;  // eq 12 with exact sign(v_x); the shear levels are solved by ODE
-  double mu = 0.5;
-  double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
-  bool obstacles_collected = false;  // step() found this step's obstacle contacts already
-  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at h
-  // The tyre's along x and y on rigid ground (rover_rigid.cpp).
-  std::array<double, 2> tangential_erp{}, tangential_cfm{};
-
+  // ODE objects, created by RoverSim::Impl::build() (the joints' feedback buffers are data)
   dWorldID world = nullptr;
   dThreadingImplementationID threading = nullptr;
   dSpaceID rover_space = nullptr, obstacle_space = nullptr;
@@ -132,28 +130,30 @@ struct RoverSim::Impl {
   std::array<dBodyID, 6> body{};
   std::array<dGeomID, 6> geom{};
   std::array<dJointID, 4> hinge{};
-  std::array<dJointFeedback, 4> hinge_fb{};
   std::array<dJointID, 4> wheel_motor{};  // one-axis AMotors (outside the hinges: see build())
-  std::array<dJointFeedback, 4> wheel_motor_fb{};
   dJointID gimbal = nullptr;        // universal joint with the stops
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
-  dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
-  // Ground feedback: each wheel's contact with the terrain (rover_rows.cpp).
-  std::array<dJointFeedback, 4> ground_fb{};
   std::vector<dGeomID> obstacle_geoms;
-  std::exception_ptr callback_error;
+};
+
+// The data (pinocchio's Data): everything a step reads and writes. The state a Snapshot carries
+// (commands, sensors, the soil rows' levels, the guesses, the tyres' deflections, the solver's
+// orderings), caches of what was last set in ODE, and the step's working arrays (preallocated:
+// the hot loop never allocates).
+struct RoverData {
+  using Vec3 = detail::Vec3;
 
   Commands cmd{};
   RoverState st{};
   // The soil rows' levels (shear used / shear cap, compaction force) that the soil's remaining
   // terms (eq 32's shear part, the axle torque) are evaluated at: the step's own, solved with the
-  // slip (rover_step.cpp); and the row guesses.
+  // slip (rover_step.cpp); and the row guesses (the last two steps' outcomes, row_guess.hpp).
   std::array<double, 4> shear_x{}, shear_y{}, compaction{};
-  std::array<std::int8_t, kGuessedRowCount> row_mode{}, row_mode_before{};
-  bool alternating = false;  // the last step held on row_mode_before: outcomes alternate
+  detail::RowGuesser guesser;
   // Rigid ground (rover_rigid.cpp): each tyre's tangential deflection (world, in the contact's
   // tangent plane) at the start of the step (Snapshot) and at the end of the current attempt.
   std::array<Vec3, 4> rigid_deflection{}, rigid_deflection_end{};
+  // Caches of what was last set in ODE's joints (set again only when it changes).
   std::array<bool, 2> stop_set{};  // the gimbal's yaw / roll stop is set (prepare_actuators)
   // The drives' AMotor parameters as last set (target rate, torque bound), NaN = never (emit()).
   std::array<std::array<double, 2>, 6> motor_set = [] {
@@ -166,6 +166,62 @@ struct RoverSim::Impl {
   // ODE failed internally (OdeInternalError): its world may be inconsistent (an exception left
   // dWorldStep half way), so it is never stepped, reset or restored again.
   std::string ode_failure;
+
+  // The step being taken: its length and the §3.4 spring–dampers as ERP / CFM at it.
+  double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
+  bool obstacles_collected = false;  // step() found this step's obstacle contacts already
+  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at h
+  // The tyre's along x and y on rigid ground (rover_rigid.cpp).
+  std::array<double, 2> tangential_erp{}, tangential_cfm{};
+  // Buffers ODE writes the joints' forces into (registered with the joints by build()).
+  std::array<dJointFeedback, 4> hinge_fb{};
+  std::array<dJointFeedback, 4> wheel_motor_fb{};
+  dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
+  // Ground feedback: each wheel's contact with the terrain (rover_rows.cpp).
+  std::array<dJointFeedback, 4> ground_fb{};
+  std::exception_ptr callback_error;
+
+  // ---- per-step working data ----
+  std::array<detail::GroundContact, 4> ground{};
+  std::array<detail::MotorRow, 6> motor{};  // wheels FL..RR, yaw, roll
+  Vec3 yaw_axis = Vec3::UnitZ(), roll_axis = Vec3::UnitX();
+  // Gimbal angles and axes of the current bodies, from read_outputs(); step() uses them unless
+  // restore() changed the bodies since (start_current false).
+  double start_psi = 0.0, start_phi = 0.0;
+  bool start_current = false;
+  std::array<Vec3, 6> base_force{}, base_torque{};  // explicit forces of this step
+  std::array<dContact, detail::kMaxObstacleContacts> obstacle_contact{};
+  std::array<dBodyID, 2 * detail::kMaxObstacleContacts> obstacle_bodies{};
+  int n_obstacle_contacts = 0;
+  // Obstacle contacts' guesses (rover_rigid.cpp): each point's wheel (-1: not a wheel) and side
+  // (the wheel is the joint's body 1 or 2), its feedback; per wheel whether its points are
+  // emitted sticking (Free: friction rows unbounded, checked after the step) or bounded
+  // (Bounded: ODE's friction bounded by mu times the normal force), for this step's attempts
+  // (obstacle_try) and as the next step's guess (obstacle_mode, in the Snapshot; obstacle_next
+  // equals it between steps: a step without contacts keeps it); points of a
+  // sticking wheel found carrying no normal force, emitted without friction rows (obstacle_off).
+  std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_wheel{};
+  std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
+  std::array<dJointFeedback, detail::kMaxObstacleContacts> obstacle_fb{};
+  std::array<RowState, 4> obstacle_mode{}, obstacle_try{}, obstacle_next{};
+  std::uint64_t obstacle_off = 0;
+  bool rows_held = true;  // settle(): the guessed rows (not the obstacles) held
+  std::array<dGeomID, detail::kMaxObstacleContacts> touched{};  // obstacles in the contacts
+  int n_touched = 0;
+  std::array<Snapshot::Body, 6> saved{};        // bodies at the start of the step (retries)
+  std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
+  std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
+  detail::LcpWorkspace lcp;  // the sparse constraint solves (ode_lcp.hpp)
+  SolverStats stats{};
+};
+
+}  // namespace detail
+
+/// The simulator: the model, its data, and the functions of a step (rover_*.cpp).
+struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
+  using Vec3 = detail::Vec3;
+  using Mat3 = detail::Mat3;
+
   // Held by every public method (cpp/common/exclusive_use.hpp): one thread at a time.
   mutable std::atomic<bool> in_use{false};
 
@@ -187,42 +243,8 @@ struct RoverSim::Impl {
     }
   }
 
-  // ---- per-step working data (preallocated; the hot loop never allocates) ----
-  std::array<detail::GroundContact, 4> ground{};
-  std::array<detail::MotorRow, 6> motor{};  // wheels FL..RR, yaw, roll
-  Vec3 yaw_axis = Vec3::UnitZ(), roll_axis = Vec3::UnitX();
-  // Gimbal angles and axes of the current bodies, from read_outputs(); step() uses them unless
-  // restore() changed the bodies since (start_current false).
-  double start_psi = 0.0, start_phi = 0.0;
-  bool start_current = false;
-  std::array<Vec3, 6> base_force{}, base_torque{};  // explicit forces of this step
-  std::array<dContact, detail::kMaxObstacleContacts> obstacle_contact{};
-  std::array<dBodyID, 2 * detail::kMaxObstacleContacts> obstacle_bodies{};
-  int n_obstacle_contacts = 0;
-  // Obstacle contacts' guesses (rover_rigid.cpp): each point's wheel (-1: not a wheel) and side
-  // (the wheel is the joint's body 1 or 2), its feedback; per wheel whether its points are
-  // emitted sticking (kFree: friction rows unbounded, checked after the step) or bounded
-  // (kBounded: ODE's friction bounded by mu times the normal force), for this step's attempts
-  // (obstacle_try) and as the next step's guess (obstacle_mode, in the Snapshot); points of a
-  // sticking wheel found carrying no normal force, emitted without friction rows (obstacle_off).
-  std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_wheel{};
-  std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
-  std::array<dJointFeedback, detail::kMaxObstacleContacts> obstacle_fb{};
-  std::array<std::int8_t, 4> obstacle_mode{}, obstacle_try{}, obstacle_next{};
-  std::uint64_t obstacle_off = 0;
-  bool rows_held = true;  // settle(): the guessed rows (not the obstacles) held
-  std::array<dGeomID, detail::kMaxObstacleContacts> touched{};  // obstacles in the contacts
-  int n_touched = 0;
-  std::array<Snapshot::Body, 6> saved{};        // bodies at the start of the step (retries)
-  std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
-  std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
-  detail::LcpWorkspace lcp;  // the sparse constraint solves (ode_lcp.hpp)
-  int attempts_last_step = 0;                   // 1 = first guess right; kMaxGuesses + 1 = exact
-  SolverStats stats{};
-
   Impl(const RoverParameters& params, const HeightMap& terrain,
        const std::vector<BoxObstacle>& obstacles, const SimOptions& options);
-  ~Impl();
 
   Vec3 axle_world(int i) const { return to_vec3(dBodyGetRotation(body[2 + i]), 1); }
   Mat3 rot(int b) const { return detail::to_mat(dBodyGetRotation(body[b])); }
@@ -251,28 +273,27 @@ struct RoverSim::Impl {
   double soil_terms_gap(int wheel, double end_slip) const;
   void end_velocity(int wheel, double& vx, double& vcx) const;
   void soil_levels(int wheel);
-  bool solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess,
-                  std::array<std::int8_t, kGuessedRowCount>& next,
-                  std::array<std::int8_t, kGuessedRowCount>& tried, int& attempts);
+  bool solve_rows(detail::RowStates& guess, detail::RowStates& next, detail::RowStates& tried,
+                  int& attempts);
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);
-  void emit_obstacles(const std::int8_t* modes);
-  bool settle_obstacles(const std::int8_t* modes);
+  void emit_obstacles(detail::RowModes modes);
+  bool settle_obstacles(detail::RowModes modes);
   struct DriveRow {
     int row;
     Vec3 axis;         // world, at the start of the step
     int body1, body2;  // the row drives (w_1 - w_2) . axis
   };
   DriveRow drive_row(int k) const;
-  void emit(const std::int8_t* modes);
-  void emit_ground(int wheel, const std::int8_t* modes, Vec3& wheel_force, Vec3& wheel_torque);
-  bool settle(const std::int8_t* modes, std::int8_t* next);
+  void emit(detail::RowModes modes);
+  void emit_ground(int wheel, detail::RowModes modes, Vec3& wheel_force, Vec3& wheel_torque);
+  bool settle(detail::RowModes modes, detail::RowStates& next);
   // rover_rigid.cpp: rigid ground under the wheels
   void prepare_rigid();
-  bool rigid_sticking(const std::int8_t* modes, int wheel) const;
-  void emit_rigid(int wheel, const std::int8_t* modes);
-  bool settle_rigid(int wheel, const std::int8_t* modes, const Vec3& patch_velocity,
-                    std::int8_t* next);
+  bool rigid_sticking(detail::RowModes modes, int wheel) const;
+  void emit_rigid(int wheel, detail::RowModes modes);
+  bool settle_rigid(int wheel, detail::RowModes modes, const Vec3& patch_velocity,
+                    detail::RowStates& next);
   void commit_rigid();
   void save_bodies();
   void restore_bodies();

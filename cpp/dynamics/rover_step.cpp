@@ -356,46 +356,29 @@ void RoverSim::Impl::restore_bodies() {
 // One solve of the step at the current soil terms: the guessed rows (guess: in; next: where the
 // rows' laws put them; tried: the last guess emitted), retried as described in step(). Returns
 // whether a guess held (false: the rows were solved with their bounds, or guessing is off).
-bool RoverSim::Impl::solve_rows(std::array<std::int8_t, kGuessedRowCount>& guess,
-                                std::array<std::int8_t, kGuessedRowCount>& next,
-                                std::array<std::int8_t, kGuessedRowCount>& tried, int& attempts) {
+bool RoverSim::Impl::solve_rows(RowStates& guess, RowStates& next, RowStates& tried,
+                                int& attempts) {
   bool held = false;
-  while (opt.guess_active_set && !held && attempts < kMaxGuesses + kGuessedRowCount) {
+  while (opt.guess_active_set && !held && attempts < RowGuesser::kMaxAttempts) {
     if (attempts++ > 0) restore_bodies();
     tried = guess;
-    emit(guess.data());
+    emit(RowModes::guess(guess));
     dWorldStep(world, h);
-    held = settle(guess.data(), next.data());
+    held = settle(RowModes::guess(guess), next);
     dJointGroupEmpty(contacts);
     if (held) {
-      alternating = guess == row_mode_before && row_mode_before != row_mode;
+      guesser.held(guess);
       break;
     }
-    if (attempts == 1 && !rows_held && row_mode_before != row_mode) {  // the other of the last two outcomes
-      const auto& other = tried == row_mode_before ? row_mode : row_mode_before;
-      if (other != tried) {
-        guess = other;
-        continue;
-      }
-    }
-    for (int r = 0; r < kGuessedRowCount; ++r) {
-      if (attempts >= kMaxGuesses) {
-        guess[r] = tried[r] != kBounded && next[r] != tried[r] ? kBounded : tried[r];
-      } else {
-        // Where each row's law put it; a row that jumped from one bound to the other (its
-        // velocity changed sign within the step) is most likely between them.
-        const bool flipped = (tried[r] == kAtHi && next[r] == kAtLo) ||
-                             (tried[r] == kAtLo && next[r] == kAtHi);
-        guess[r] = flipped ? kFree : next[r];
-      }
-    }
+    if (guesser.other_outcome(attempts, rows_held, tried, guess)) continue;
+    guess = RowGuesser::next_guess(attempts, tried, next);
   }
   if (!held) {  // guessing off (or, never seen, no progress): every row with its bounds
     if (attempts++ > 0) restore_bodies();
-    obstacle_try.fill(kBounded);
-    emit(nullptr);
+    obstacle_try.fill(RowState::Bounded);
+    emit(RowModes::all_bounded());
     dWorldStep(world, h);
-    settle(nullptr, next.data());
+    settle(RowModes::all_bounded(), next);
     dJointGroupEmpty(contacts);
   }
   return held;
@@ -472,15 +455,11 @@ void RoverSim::Impl::step_once() {
   // non-finite state, so emit() refuses absurd forces before stepping; check_divergence() then
   // only has to catch finite but absurd states. dWorldStep (Dantzig), not dWorldQuickStep:
   // QuickStep reorders constraints with ODE's process-wide random generator (not reproducible).
-  // Guesses in turn: the last step's outcome; the outcome two steps back (a period-2 chatter,
-  // e.g. a stuck wheel's v_x changing sign every step, defeats the first; once it held, it goes
-  // first); then the last attempt's outcome. After kMaxGuesses wrong guesses every row whose
-  // guess failed is solved with its bounds instead (ODE pivots it, and a bounded row cannot be
-  // wrong), attempt after attempt: each adds at least one bounded row, so this ends.
-  const bool chatter = alternating && row_mode_before != row_mode;
-  std::array<std::int8_t, kGuessedRowCount> guess = chatter ? row_mode_before : row_mode;
-  std::array<std::int8_t, kGuessedRowCount> next = guess, tried = guess;
-  alternating = false;
+  // The guesses in turn (RowGuesser, row_guess.hpp): the last step's outcome, the one two steps
+  // back, the last attempt's; then the failing rows solved with their bounds (ODE pivots them,
+  // and a bounded row cannot be wrong).
+  RowStates guess = guesser.first_guess();
+  RowStates next = guess, tried = guess;
   const std::uint64_t lcp_messages = ode_lcp_messages;
   const detail::LcpScope lcp_scope(&lcp);
   obstacle_try = obstacle_mode;
@@ -554,12 +533,11 @@ void RoverSim::Impl::step_once() {
       sigma[i] = ground[i].active ? std::clamp(sigma[i] + step[i], -1.0, 1.0) : sigma[i];
   }
   if (opt.ground == GroundType::Rigid) commit_rigid();
-  row_mode_before = row_mode;
-  row_mode = next;
+  guesser.commit(next);
   if (n_obstacle_contacts > 0) {
     bool bounded = false;
     for (int k = 0; k < n_obstacle_contacts; ++k)
-      bounded = bounded || obstacle_wheel[k] < 0 || obstacle_try[obstacle_wheel[k]] != kFree ||
+      bounded = bounded || obstacle_wheel[k] < 0 || obstacle_try[obstacle_wheel[k]] != RowState::Free ||
                 !opt.guess_obstacle_contacts;
     ++(bounded ? stats.obstacle_bounded : stats.obstacle_guessed);
   }
@@ -569,10 +547,9 @@ void RoverSim::Impl::step_once() {
   stats.sparse_solves = lcp.sparse;
   stats.dense_solves = lcp.dense;
   if (opt.guess_active_set) {
-    const bool some_bounded = std::find(tried.begin(), tried.end(), kBounded) != tried.end();
-    if (held && attempts == 1) ++stats.first_guess;
-    else if (held && !some_bounded) ++stats.later_guess;
-    else ++stats.pivoted;
+    const GuessResult r = RowGuesser::result(held, attempts, tried);
+    ++(r == GuessResult::First ? stats.first_guess
+       : r == GuessResult::Later ? stats.later_guess : stats.pivoted);
   }
   read_outputs(h);
   check_divergence();

@@ -19,7 +19,7 @@ from . import soil as _soil
 from ._core import dynamics as _dyn
 from ._core.dynamics import (  # noqa: F401  (re-exports)
     COMMAND_SIZE,
-    OBSERVATION_SIZE,
+    STATE_VECTOR_SIZE,
     ActuatorMode,
     BatchStepper,
     BoxObstacle,
@@ -44,8 +44,9 @@ from ._core.dynamics import (  # noqa: F401  (re-exports)
 
 #: Wheel order of every per-wheel array.
 WHEELS = ("FL", "FR", "RL", "RR")
-#: Names of the columns of RoverSim.observation() and BatchStepper.step().
-OBSERVATION_NAMES = tuple(RoverSim.observation_names())
+#: Names of the STATE_VECTOR_SIZE columns of RoverSim.state_vector() and BatchStepper.step() (the
+#: rover's full state, not the policy's observation: sensing.OBSERVATION_SIZE, layout ernest-obs-v2).
+STATE_VECTOR_NAMES = tuple(RoverSim.state_vector_names())
 #: Columns of BatchStepper commands.
 COMMAND_NAMES = ("w_FL", "w_FR", "w_RL", "w_RR", "yaw_rate", "roll_rate", "gimbal_enabled",
                  "clutch_engage")
@@ -147,7 +148,7 @@ def command_array(rows: Sequence[Sequence[float]]) -> np.ndarray:
 
 
 __all__ = [
-    "COMMAND_NAMES", "COMMAND_SIZE", "OBSERVATION_NAMES", "OBSERVATION_SIZE", "WHEELS",
+    "COMMAND_NAMES", "COMMAND_SIZE", "STATE_VECTOR_NAMES", "STATE_VECTOR_SIZE", "WHEELS",
     "ActuatorMode", "BatchStepper", "BoxObstacle", "ClutchState", "Commands", "GroundType",
     "HeightMap", "MotorElectrical", "MotorParameters", "RoverParameters", "RoverSim", "RoverState",
     "SimOptions", "SimulationDiverged", "Snapshot", "SolverStats", "WheelSyncResult", "command_array",

@@ -241,7 +241,7 @@ def wheels_over(course: str, env) -> int:
     Bickler trap: a wheel is over when its centre is past the far edge of the row of rocks.
     Wheel-high step: when its centre is past the step's edge and more than half a wheel radius
     above the step's top (a wheel on top has its centre a radius above it)."""
-    wp_end = np.asarray(env.core.state["wheel_position"])
+    wp_end = np.asarray(env.core.state.wheel_position)
     sc = env.scenario
     if course == "bickler":
         far = float(max(o[0] + 0.5 * o[3] for o in np.asarray(sc.obstacles)))

@@ -464,17 +464,17 @@ TEST(BatchStepper, ThreadsGiveTheSameBitsAsSequentialStepping) {
   // Also a stress test: ODE's shared default threading object used to abort here when two worlds
   // stepped concurrently (each world now owns its own).
   const int n = 4, steps = 60;
-  std::vector<double> seq(n * RoverSim::kObservationSize);
+  std::vector<double> seq(n * RoverSim::kStateVectorSize);
   for (int i = 0; i < n; ++i) {
     auto sim = rock_field(10 + i);
     drive(*sim, steps);
-    sim->observation(seq.data() + i * RoverSim::kObservationSize);
+    sim->state_vector(seq.data() + i * RoverSim::kStateVectorSize);
   }
   for (int rep = 0; rep < 5; ++rep) {
     std::vector<std::shared_ptr<RoverSim>> sims;
     for (int i = 0; i < n; ++i) sims.push_back(std::shared_ptr<RoverSim>(rock_field(10 + i).release()));
     BatchStepper batch(sims, 2);
-    std::vector<double> obs(n * RoverSim::kObservationSize);
+    std::vector<double> obs(n * RoverSim::kStateVectorSize);
     for (int k = 0; k < steps; ++k) {
       std::vector<double> cmd(n * RoverSim::kCommandSize);
       for (int i = 0; i < n; ++i) {
@@ -605,7 +605,7 @@ void expect_guesses_match_pivoting(SimOptions o, const HeightMap& hm, double hea
     ASSERT_LE(gap, 1.0) << "step " << k;
     ASSERT_NEAR(guessed.state().wheel_load[0], pivoted.state().wheel_load[0], 1e-3) << k;
     ASSERT_NEAR(guessed.state().wheel_torque[0], pivoted.state().wheel_torque[0], 1e-3) << k;
-    for (auto m : guessed.snapshot().row_mode) seen[std::min<int>(m, 2)] += 1;
+    for (auto m : guessed.snapshot().row_mode) seen[std::min(static_cast<int>(m), 2)] += 1;
   }
   const SolverStats& s = guessed.solver_stats();
   EXPECT_EQ(s.steps, static_cast<std::uint64_t>(steps));

@@ -102,6 +102,6 @@ TEST(ObstacleContacts, RestoreOnRocksIsBitExact) {
   const Snapshot fa = a.snapshot(), fb = b.snapshot();
   EXPECT_EQ(std::memcmp(fa.bodies.data(), fb.bodies.data(), sizeof(fa.bodies)), 0);
   Snapshot bad = s;
-  bad.obstacle_mode[1] = 7;
+  bad.obstacle_mode[1] = static_cast<RowState>(7);
   EXPECT_THROW(b.restore(bad), std::invalid_argument);
 }

@@ -32,9 +32,9 @@ def test_static_loads_sum_to_weight_and_fts_shapes():
 def test_observation_layout_matches_state():
     sim = rigid_sim()
     sim.step_n(5)
-    o = sim.observation()
-    names = D.OBSERVATION_NAMES
-    assert o.shape == (D.OBSERVATION_SIZE,) == (len(names),)
+    o = sim.state_vector()
+    names = D.STATE_VECTOR_NAMES
+    assert o.shape == (D.STATE_VECTOR_SIZE,) == (len(names),)
     s = sim.state
     assert o[names.index("time")] == pytest.approx(s.time)
     assert o[names.index("wheel_load_RR")] == pytest.approx(s.wheel_load[3])
@@ -66,13 +66,13 @@ def test_batch_matches_single_rover_runs_and_threads():
         c.yaw_rate = cmds[k, 4]
         sim.set_commands(c)
         sim.step_n(20)
-        solo.append(sim.observation())
+        solo.append(sim.state_vector())
     for threads in (1, 2):
         batch = D.BatchStepper([make(k) for k in range(3)], threads)
         obs = None
         for _ in range(4):
             obs = batch.step(cmds, 5)
-        assert obs.shape == (3, D.OBSERVATION_SIZE)
+        assert obs.shape == (3, D.STATE_VECTOR_SIZE)
         np.testing.assert_array_equal(obs, np.array(solo))  # bit-identical, any thread count
 
 
@@ -103,11 +103,11 @@ def test_snapshot_restore_exact():
     sim.step_n(30)
     snap = sim.snapshot()
     sim.step_n(50)
-    a = sim.observation()
+    a = sim.state_vector()
     sim.restore(snap)
     assert sim.state.time == pytest.approx(snap.time)
     sim.step_n(50)
-    np.testing.assert_array_equal(sim.observation(), a)
+    np.testing.assert_array_equal(sim.state_vector(), a)
 
 
 def test_divergence_raises_python_exception():

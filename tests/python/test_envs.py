@@ -120,7 +120,7 @@ def test_load_balancing_controller_returns_to_the_path_and_passive_does_not_stee
     psi = []
     for _ in range(6):
         obs, *_ = env2.step(PassiveController()(obs))
-        psi.append(env2.unwrapped.core.state["gimbal_yaw"])
+        psi.append(env2.unwrapped.core.state.gimbal_yaw)
     assert max(abs(p) for p in psi) < 1e-3
 
 

@@ -104,7 +104,7 @@ def test_two_threads_on_one_sim_are_refused_not_crashed():
     assert errors, "no concurrent call was detected"
     assert all("in use by another thread" in e for e in errors), errors[:3]
     sim.step_n(2)  # usable afterwards
-    assert np.isfinite(sim.observation()).all()
+    assert np.isfinite(sim.state_vector()).all()
     assert "one thread at a time" in D.RoverSim.__doc__.lower()
 
 

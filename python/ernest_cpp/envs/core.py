@@ -174,10 +174,10 @@ class ErnestEnv(gym.Env):
 
     def _snapshot(self, info):
         s = self.core.state
-        return {"time": s["time"], "position": np.array(s["position"]), "yaw": s["yaw"],
-                "roll": s["roll"], "pitch": s["pitch"], "gimbal_yaw": s["gimbal_yaw"],
-                "gimbal_roll": s["gimbal_roll"], "roll_torque": s["roll_torque"],
-                "wheel_load": np.array(s["wheel_load"]), "energy": s["energy"],
+        return {"time": s.time, "position": np.array(s.position), "yaw": s.yaw,
+                "roll": s.roll, "pitch": s.pitch, "gimbal_yaw": s.gimbal_yaw,
+                "gimbal_roll": s.gimbal_roll, "roll_torque": s.roll_torque,
+                "wheel_load": np.array(s.wheel_load), "energy": s.energy,
                 "action": np.array(self.core.current_action)}
 
     def render(self):
@@ -199,7 +199,7 @@ class ErnestEnv(gym.Env):
     def heading_and_lateral(self) -> tuple[float, float]:
         s = self.core.state
         p = self.core.scenario.path
-        return p.heading_deviation(s["yaw"]), p.lateral_deviation(s["position"][0], s["position"][1])
+        return p.heading_deviation(s.yaw), p.lateral_deviation(s.position[0], s.position[1])
 
 
 def deg(x: float) -> float:

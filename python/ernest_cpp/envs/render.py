@@ -36,8 +36,8 @@ def render_frame(env) -> np.ndarray:
     side.clear()
     sc = env.core.scenario
     st = env.core.state
-    pos = np.asarray(st["position"])
-    yaw = st["yaw"]
+    pos = np.asarray(st.position)
+    yaw = st.yaw
     h = np.asarray(sc.heights)
     ox, oy = sc.origin
     extent = [ox, ox + sc.spacing * (h.shape[0] - 1), oy, oy + sc.spacing * (h.shape[1] - 1)]
@@ -56,8 +56,8 @@ def render_frame(env) -> np.ndarray:
     top.plot(line[:, 0], line[:, 1], "--", color="tab:blue", lw=1.2, label="desired path")
     traj = np.array([s["position"][:2] for s in getattr(env, "history", [])] or [pos[:2]])
     top.plot(traj[:, 0], traj[:, 1], color="white", lw=1.0)
-    wp = np.asarray(st["wheel_position"])
-    loads = np.asarray(st["wheel_load"])
+    wp = np.asarray(st.wheel_position)
+    loads = np.asarray(st.wheel_load)
     body = np.array([[0.43, 0.4], [0.43, -0.4], [-0.43, -0.4], [-0.43, 0.4], [0.43, 0.4]])
     b = body @ _rot(yaw).T + pos[:2]
     top.plot(b[:, 0], b[:, 1], color="k", lw=1)
@@ -68,7 +68,7 @@ def render_frame(env) -> np.ndarray:
     top.set_xlim(x0, x1)
     top.set_ylim(y0, y1)
     top.set_aspect("equal")
-    top.set_title(f"{sc.name}  t = {st['time']:.1f} s", fontsize=9)
+    top.set_title(f"{sc.name}  t = {st.time:.1f} s", fontsize=9)
     top.legend(loc="upper left", fontsize=7)
     if "cbar" not in _FIG:
         _FIG["cbar"] = fig.colorbar(sca, ax=top, fraction=0.035, label="wheel load [N]")
@@ -83,8 +83,8 @@ def render_frame(env) -> np.ndarray:
     side.set_xlim(-3, 5)
     side.set_ylim(zs.min() - 0.3, max(zs.max(), pos[2]) + 0.6)
     side.set_aspect("equal")
-    side.set_title(f"side view  yaw {math.degrees(st['gimbal_yaw']):+.0f} deg, "
-                   f"roll {math.degrees(st['gimbal_roll']):+.0f} deg", fontsize=9)
+    side.set_title(f"side view  yaw {math.degrees(st.gimbal_yaw):+.0f} deg, "
+                   f"roll {math.degrees(st.gimbal_roll):+.0f} deg", fontsize=9)
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="rgba", dpi=80)

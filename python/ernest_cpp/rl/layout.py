@@ -32,7 +32,6 @@ The action is exposed to the policy in [-1, 1]^3 and maps affinely to Vx ∈ [0,
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -50,8 +49,11 @@ FTS_TORQUE_SIGMA = 2.0  # N·m, §4.2
 LAYOUT_VERSION = f"ernest-obs-v{_sensing.OBSERVATION_LAYOUT_VERSION}"
 LEGACY_LAYOUT_VERSIONS = ("ernest-obs-v1",)
 
-ACTION_LOW = np.array([0.0, -math.radians(20.0), -math.radians(10.0)])  # Vx, psi_dot, phi_dot
-ACTION_HIGH = np.array([0.2, math.radians(20.0), math.radians(10.0)])
+#: The §4.2 action ranges (Vx, psi_dot, phi_dot) [m/s, rad/s, rad/s]: from their one source, the
+#: C++ ``sensing.ActionLimits`` that the environments and the runtime map actions with.
+_LIMITS = _sensing.ActionLimits()
+ACTION_LOW = np.array([0.0, -_LIMITS.yaw_rate_max, -_LIMITS.roll_rate_max])
+ACTION_HIGH = np.array([_LIMITS.vx_max, _LIMITS.yaw_rate_max, _LIMITS.roll_rate_max])
 
 
 @dataclass(frozen=True)
