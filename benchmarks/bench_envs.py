@@ -108,26 +108,37 @@ def schedule_bound(n: int = 8, chunk: int = 4, calls: int = 100):
     """What the thread schedule alone allows, whatever the machine's load: each rover's CPU time
     per call (thread CPU time: preemption by other processes does not count) measured on its own,
     one after the other, then per call the 2-thread makespan of a fixed
-    share (rover i on thread i % 2, the old BatchStepper) and of handing rovers out in order to
-    whichever thread is free (ThreadPool); speed-up bound = total work / makespan summed over
-    calls."""
+    share (rover i on thread i % 2, the old BatchStepper), of handing rovers out in index order to
+    whichever thread is free (ThreadPool), and of handing them out costliest first by the last
+    call's constraint solves (BatchStepper now); speed-up bound = total work / makespan summed
+    over calls."""
     sims, _ = _rovers(n)
-    total = fixed = greedy = 0.0
+    total = fixed = greedy = longest = 0.0
+    cost = [0] * n  # constraint solves of each rover in the last call (BatchStepper's order)
+
+    def makespan(order, t):
+        free = [0.0, 0.0]
+        for i in order:
+            k = free.index(min(free))
+            free[k] += t[i]
+        return max(free)
+
     for _ in range(calls):
-        t = []
-        for sim in sims:
+        t, order = [], sorted(range(n), key=lambda i: (-cost[i], i))
+        for i, sim in enumerate(sims):
+            s0 = sim.solver_stats.sparse_solves + sim.solver_stats.dense_solves
             t0 = time.thread_time()
             sim.step_n(chunk)
             t.append(time.thread_time() - t0)
+            cost[i] = sim.solver_stats.sparse_solves + sim.solver_stats.dense_solves - s0
         total += sum(t)
         fixed += max(sum(t[0::2]), sum(t[1::2]))
-        free = [0.0, 0.0]
-        for ti in t:
-            k = free.index(min(free))
-            free[k] += ti
-        greedy += max(free)
+        greedy += makespan(range(n), t)
+        longest += makespan(order, t)
     print(f"\nschedule bound, {n} rovers on rocks, {chunk} steps per call, {calls} calls: fixed "
-          f"share {total / fixed:.2f}x, dynamic {total / greedy:.2f}x (2 threads, perfect cores)")
+          f"share {total / fixed:.2f}x, dynamic in index order {total / greedy:.2f}x, dynamic "
+          f"longest first (by the last call's solves, BatchStepper) {total / longest:.2f}x "
+          f"(2 threads, perfect cores)")
 
 
 def main():

@@ -1,5 +1,6 @@
 #include "ernest/dynamics/batch_stepper.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "ernest/common/exclusive_use.hpp"
@@ -22,7 +23,10 @@ std::vector<std::shared_ptr<RoverSim>> checked(std::vector<std::shared_ptr<Rover
 }  // namespace
 
 BatchStepper::BatchStepper(std::vector<std::shared_ptr<RoverSim>> sims, int threads)
-    : sims_(checked(std::move(sims), threads)), pool_(threads), errors_(sims_.size()) {}
+    : sims_(checked(std::move(sims), threads)), pool_(threads), errors_(sims_.size()),
+      order_(sims_.size()), cost_(sims_.size(), 0) {
+  for (int i = 0; i < size(); ++i) order_[static_cast<size_t>(i)] = i;
+}
 
 RoverSim& BatchStepper::sim(int i) {
   require(i >= 0 && i < size(), "BatchStepper.sim: index out of range");
@@ -40,15 +44,26 @@ void BatchStepper::step(const double* commands, int n_steps, double* states) {
   for (auto& e : errors_) e = nullptr;
   // Each rover's failure is kept (never thrown into the pool, which would stop handing out the
   // other rovers): every rover steps, then the first failure by index is rethrown.
-  pool_.parallel_for(size(), [&](int i) {
+  pool_.parallel_for(size(), [&](int k) {
+    const int i = order_[static_cast<size_t>(k)];
     try {
       RoverSim& s = *sims_[static_cast<size_t>(i)];
+      const auto solves = [&s] {
+        return s.solver_stats().sparse_solves + s.solver_stats().dense_solves;
+      };
+      const std::uint64_t before = solves();
       if (commands) s.set_command_vector(commands + i * RoverSim::kCommandSize);
       s.step_n(n_steps);
+      cost_[static_cast<size_t>(i)] = solves() - before;
       if (states) s.state_vector(states + i * RoverSim::kStateVectorSize);
     } catch (...) {
       errors_[static_cast<size_t>(i)] = std::current_exception();
     }
+  });
+  // Longest first next time (ties by index: the order, not the results, depends on the costs).
+  std::sort(order_.begin(), order_.end(), [&](int a, int b) {
+    const std::uint64_t ca = cost_[static_cast<size_t>(a)], cb = cost_[static_cast<size_t>(b)];
+    return ca != cb ? ca > cb : a < b;
   });
   for (size_t i = 0; i < errors_.size(); ++i) {
     if (!errors_[i]) continue;

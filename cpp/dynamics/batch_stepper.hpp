@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <exception>
 #include <memory>
 #include <vector>
@@ -18,7 +19,10 @@ class BatchStepper {
   /// whichever thread is free (ThreadPool's dynamic scheduling: a rover touching rocks takes up
   /// to SimOptions::obstacle_substeps times longer per step than one on open ground, so a fixed
   /// share per thread left one thread waiting for the other). Results never depend on which
-  /// thread steps a rover: every rover owns its ODE world and solver data.
+  /// thread steps a rover: every rover owns its ODE world and solver data. The costliest rovers
+  /// of the last call (its constraint solves: a rover stalled on a rock stays costly) are handed
+  /// out first, so that a long rover does not start last while the other thread idles (longest
+  /// first: benchmarks/RESULTS.md, "Batch scaling").
   BatchStepper(std::vector<std::shared_ptr<RoverSim>> sims, int threads);
   BatchStepper(const BatchStepper&) = delete;
   BatchStepper& operator=(const BatchStepper&) = delete;
@@ -42,6 +46,8 @@ class BatchStepper {
   std::vector<std::shared_ptr<RoverSim>> sims_;
   ThreadPool pool_;
   std::vector<std::exception_ptr> errors_;
+  std::vector<int> order_;                // rovers in the order they are handed out
+  std::vector<std::uint64_t> cost_;       // constraint solves of each rover in the last call
   std::atomic<bool> in_use_{false};  // step() from one thread at a time (exclusive_use.hpp)
 };
 

@@ -52,7 +52,7 @@ OdeSolve ode_solver() {
 // Row i's place among the solved rows (ascending), or -1 if it is not solved.
 int pos_of(LdltPlan::Mask solved, unsigned i) {
   if (!(solved >> i & 1)) return -1;
-  return __builtin_popcountll(solved & ((LdltPlan::Mask{1} << i) - 1));
+  return mask_count(solved & ((LdltPlan::Mask{1} << i) - 1));
 }
 
 // The solve with friction rows at their bounds (solve_sparse): on entry x holds y = A_SS⁻¹ b_S
@@ -75,7 +75,7 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
   int nk = 0, m = 0;
   std::array<unsigned, kMax> crow;
   for (LdltPlan::Mask c = clamped; c; c &= c - 1) {
-    const unsigned i = static_cast<unsigned>(__builtin_ctzll(c));
+    const unsigned i = static_cast<unsigned>(mask_low(c));
     xf[i] = 0.0;
     const int pk = pos[findex[i]];
     if (pk < 0) continue;
@@ -119,7 +119,7 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
 // The guess starts from the last accepted one for the same bounded rows (LcpWorkspace::
 // guesses). Returns false without touching the outputs if no guess held, if a row has bounds
 // that depend on another's force (findex) and ws.coulomb_friction is off, a row has no zero
-// bound, or there are over 64 rows.
+// bound, or there are over LdltPlan::kMaxRows (128) rows.
 //
 // Friction rows (findex[i] = k: |x_i| <= mu_i x_k, ODE's pyramid; with ws.coulomb_friction) are
 // guessed too: inside (solved with the others, checked against mu_i times the final x_k) or at
@@ -133,7 +133,7 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
                   unsigned nub, const double* pairslh, const int* findex) {
   using Mask = LdltPlan::Mask;
   constexpr int kMax = LdltPlan::kMaxRows;
-  if (n > static_cast<unsigned>(kMax) || n == 0) return false;  // (row masks of 64 bits)
+  if (n > static_cast<unsigned>(kMax) || n == 0) return false;  // (row masks of kMax bits)
   Mask bounded = 0, friction = 0;
   for (unsigned i = 0; i < n; ++i) {
     const double lo = pairslh[2 * i], hi = pairslh[2 * i + 1];
@@ -147,7 +147,7 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
     bounded |= Mask{1} << i;
   }
   const int kAttempts = friction ? 5 : 3;
-  const Mask all = n == 64 ? ~Mask{0} : (Mask{1} << n) - 1;
+  const Mask all = n == kMax ? ~Mask{0} : (Mask{1} << n) - 1;
   const unsigned stride = dPAD(n);
   LcpWorkspace::Guess* memory = ws.guess_for(n, bounded);
   // Guessed inside their bounds: as last time for these rows; a new friction row sticks.
@@ -165,7 +165,7 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
   for (int attempt = 0; attempt < kAttempts && !held; ++attempt) {
     solved = (all & ~bounded) | (active & bounded);
     int nf = 0;
-    for (Mask m = solved; m; m &= m - 1) rows[nf++] = static_cast<unsigned>(__builtin_ctzll(m));
+    for (Mask m = solved; m; m &= m - 1) rows[nf++] = static_cast<unsigned>(mask_low(m));
     if (nf > 0) {
       // A remembered plan for these rows serves if A has no non-zero outside its factor;
       // otherwise A's pattern (each solved row's non-zeros left of the diagonal, two at a time,
@@ -181,10 +181,10 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
           Mask m = 0;
           for (unsigned j = 0; j <= i; j += 2)  // row[i + 1] exists: i is odd when stride == n
             m |= Mask(_mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero))) << j;
-          const Mask upto = i < 63 ? (Mask{2} << i) - 1 : ~Mask{0};
+          const Mask upto = i < kMax - 1 ? (Mask{2} << i) - 1 : ~Mask{0};
           m &= upto;
           for (Mask o = ~solved & upto; o;) {  // drop the other rows' columns, top down
-            const Mask below = (Mask{1} << (63 - __builtin_clzll(o))) - 1;
+            const Mask below = (Mask{1} << mask_high(o)) - 1;
             m = (m & below) | ((m >> 1) & ~below);
             o &= below;
           }
@@ -220,8 +220,8 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
     for (Mask m = bounded & ~solved; m; m &= m - 1) {
       // w_i = A_i x - b_i: A's row i left of the diagonal, its column i below (lower triangle),
       // in two interleaved sums (a single one waits an add latency per term).
-      const unsigned i = static_cast<unsigned>(__builtin_ctzll(m));
-      const int split = __builtin_popcountll(solved & ((Mask{1} << i) - 1));
+      const unsigned i = static_cast<unsigned>(mask_low(m));
+      const int split = mask_count(solved & ((Mask{1} << i) - 1));
       const double* row = A + i * stride;
       double s0 = 0.0, s1 = 0.0;
       int a = 0;
@@ -239,7 +239,7 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
       }
       if (a < nf) s0 += A[rows[a] * stride + i] * x[a];
       for (Mask c = clamped; c; c &= c - 1) {  // the friction rows at a bound
-        const unsigned j = static_cast<unsigned>(__builtin_ctzll(c));
+        const unsigned j = static_cast<unsigned>(mask_low(c));
         s1 += a_at(i, j) * xf[j];
       }
       const double wi = (s0 + s1) - pairsbx[2 * i];
@@ -263,7 +263,7 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
   ws.remember(memory, n, bounded, solved & bounded, at_lo & friction & ~solved);
   for (unsigned i = 0; i < n; ++i) pairsbx[2 * i + 1] = 0.0;
   for (Mask c = friction & ~solved; c; c &= c - 1) {
-    const unsigned i = static_cast<unsigned>(__builtin_ctzll(c));
+    const unsigned i = static_cast<unsigned>(mask_low(c));
     pairsbx[2 * i + 1] = xf[i];
   }
   int nf = 0;
@@ -431,14 +431,14 @@ const LdltPlan& LcpWorkspace::adopt(LdltPlan* remembered, const LdltPlan::Mask* 
   return p;
 }
 
-LcpWorkspace::Guess* LcpWorkspace::guess_for(unsigned n, std::uint64_t bounded) {
+LcpWorkspace::Guess* LcpWorkspace::guess_for(unsigned n, LdltPlan::Mask bounded) {
   for (Guess& g : guesses)
     if (g.n == n && g.bounded == bounded) return &g;
   return nullptr;
 }
 
-void LcpWorkspace::remember(Guess* known, unsigned n, std::uint64_t bounded,
-                            std::uint64_t active, std::uint64_t at_lo) {
+void LcpWorkspace::remember(Guess* known, unsigned n, LdltPlan::Mask bounded,
+                            LdltPlan::Mask active, LdltPlan::Mask at_lo) {
   if (!known) {
     known = &guesses[next_guess];
     next_guess = (next_guess + 1) % kGuesses;
@@ -454,23 +454,27 @@ void LcpWorkspace::clear() {
 }
 
 // Layout: next_plan, then per plan n (0: unused), stride, rows[n], pattern[n]; then
-// next_guess and per guess n, bounded, active, at_lo.
+// next_guess and per guess n, bounded, active, at_lo; each row set (mask) as two words, low first.
 void LcpWorkspace::save(std::vector<std::uint64_t>& out) const {
   out.clear();
+  const auto put = [&](LdltPlan::Mask m) {
+    out.push_back(static_cast<std::uint64_t>(m));
+    out.push_back(static_cast<std::uint64_t>(m >> 64));
+  };
   out.push_back(static_cast<std::uint64_t>(next_plan));
   for (const LdltPlan& p : plans) {
     out.push_back(static_cast<std::uint64_t>(p.size()));
     if (p.size() == 0) continue;
     out.push_back(static_cast<std::uint64_t>(p.stride()));
     for (int i = 0; i < p.size(); ++i) out.push_back(p.rows()[i]);
-    for (int i = 0; i < p.size(); ++i) out.push_back(p.pattern()[i]);
+    for (int i = 0; i < p.size(); ++i) put(p.pattern()[i]);
   }
   out.push_back(static_cast<std::uint64_t>(next_guess));
   for (const Guess& g : guesses) {
     out.push_back(g.n);
-    out.push_back(g.bounded);
-    out.push_back(g.active);
-    out.push_back(g.at_lo);
+    put(g.bounded);
+    put(g.active);
+    put(g.at_lo);
   }
 }
 
@@ -484,6 +488,10 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
   const auto next = [&] {
     if (k >= in.size()) bad();
     return in[k++];
+  };
+  const auto mask = [&] {
+    const LdltPlan::Mask lo = next();
+    return lo | LdltPlan::Mask{next()} << 64;
   };
   const std::uint64_t np = next();
   if (np >= kPlans) bad();
@@ -499,7 +507,7 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
       if (rows[i] >= stride || (i > 0 && rows[i] <= rows[i - 1])) bad();
     }
     for (std::uint64_t i = 0; i < n; ++i) {
-      pattern[i] = next();
+      pattern[i] = mask();
       if ((pattern[i] >> i) != 1) bad();  // lower triangle with its diagonal
     }
     if (stride > 4 * LdltPlan::kMaxRows) bad();
@@ -508,7 +516,8 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
   const std::uint64_t ng = next();
   if (ng >= kGuesses) bad();
   for (Guess& g : guesses) {
-    const std::uint64_t n = next(), bounded = next(), active = next(), at_lo = next();
+    const std::uint64_t n = next();
+    const LdltPlan::Mask bounded = mask(), active = mask(), at_lo = mask();
     if (n > LdltPlan::kMaxRows || (active & ~bounded) != 0 || (at_lo & ~bounded) != 0 ||
         (at_lo & active) != 0)
       bad();

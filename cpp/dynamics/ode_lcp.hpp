@@ -8,7 +8,7 @@
 // dxSolveLCP, so that the dynamic linker binds ODE's call to it: while a LcpScope is alive on
 // the thread, such problems are solved with SparseLdlt (the bounded rows guessed as they ended
 // last time) and checked exactly as Dantzig's method would end; anything else (friction with
-// findex unless LcpWorkspace::coulomb_friction, a bounded row without a zero bound, guesses that keep failing, more than 64 rows, no
+// findex unless LcpWorkspace::coulomb_friction, a bounded row without a zero bound, guesses that keep failing, more than 128 rows, no
 // scope) goes to ODE's own solver, found with dlsym. ODE bounds a friction row by mu times the
 // normal force found before the friction rows; within a scope that asks for it (exact_friction)
 // its answer is then corrected to Coulomb's law with the final normal force (solve_coulomb).
@@ -41,7 +41,7 @@ struct LcpWorkspace {
   /// Friction rows (findex) are bounded rows too: active = inside, else at +-mu x_k (at_lo: -).
   struct Guess {
     unsigned n = 0;
-    std::uint64_t bounded = 0, active = 0, at_lo = 0;
+    LdltPlan::Mask bounded = 0, active = 0, at_lo = 0;
   };
   static constexpr int kGuesses = 4;
   std::array<Guess, kGuesses> guesses{};
@@ -75,9 +75,9 @@ struct LcpWorkspace {
   const LdltPlan& adopt(LdltPlan* remembered, const LdltPlan::Mask* pattern,
                         const unsigned* rows, int n, int stride);
   /// The remembered guess for this set of bounded rows, or nullptr; remember() stores one.
-  Guess* guess_for(unsigned n, std::uint64_t bounded);
-  void remember(Guess* known, unsigned n, std::uint64_t bounded, std::uint64_t active,
-                std::uint64_t at_lo);
+  Guess* guess_for(unsigned n, LdltPlan::Mask bounded);
+  void remember(Guess* known, unsigned n, LdltPlan::Mask bounded, LdltPlan::Mask active,
+                LdltPlan::Mask at_lo);
   void clear();
   void save(std::vector<std::uint64_t>& out) const;
   /// Inverse of save(); throws std::invalid_argument on data that save() cannot have written.

@@ -421,8 +421,17 @@ void RoverSim::Impl::step() {
     step_once();
     return;
   }
-  obstacles_collected = false;  // collected with the full step's compliance: again per substep
+  // The contacts just collected are the first substep's (same poses): only their §3.4
+  // compliance changes with the step length. A pair of m points has soft_cfm = m * contact_cfm
+  // (near()); recover m and recompute as near() does, so that this is bit for bit a collision.
+  const double full_cfm = contact_cfm;
   set_step_length(opt.dt / n);
+  for (int k = 0; k < n_obstacle_contacts; ++k) {
+    dSurfaceParameters& s = obstacle_contact[k].surface;
+    s.soft_erp = contact_erp;
+    s.soft_cfm = contact_cfm * static_cast<double>(std::lround(s.soft_cfm / full_cfm));
+  }
+  obstacles_collected = true;  // later substeps collide again (step_once)
   const Vec3 force = pending_force;
   for (int k = 0; k < n; ++k) {
     pending_force = force;

@@ -14,8 +14,8 @@ namespace ernest::dynamics {
 namespace {
 using Mask = LdltPlan::Mask;
 inline Mask bit(int i) { return Mask{1} << i; }
-inline int pop(Mask m) { return __builtin_popcountll(m); }
-inline int low(Mask m) { return __builtin_ctzll(m); }
+inline int pop(Mask m) { return mask_count(m); }
+inline int low(Mask m) { return mask_low(m); }
 // Supernodes at least this wide are factorised with dense kernels (factor_supernode).
 constexpr int kDenseSupernode = 4;
 }  // namespace
@@ -68,19 +68,26 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
   }
   // Minimum degree (ties: lowest row), eliminating on the masks; each eliminated row's live
   // neighbours are its column of L. Once the live rows form a clique they are the dense tail.
+  // A row's degree changes only when it neighbours the eliminated row: kept, not recounted.
   std::array<Mask, kMaxRows> column{};  // L's column pattern, row numbering
+  std::array<int, kMaxRows> degree;
+  for (int i = 0; i < n; ++i) degree[i] = pop(adj[i]);
   Mask alive = n == kMaxRows ? ~Mask{0} : bit(n) - 1;
   int k = 0;
   for (; k < n; ++k) {
     int best = -1, best_degree = kMaxRows;
     for (Mask m = alive; m; m &= m - 1) {
       const int v = low(m);
-      const int d = pop(adj[v] & alive);
-      if (d < best_degree) best_degree = d, best = v;
+      if (degree[v] < best_degree) best_degree = degree[v], best = v;
     }
-    if (best_degree == pop(alive) - 1) break;  // every live row is adjacent to every other
+    if (best_degree == n - k - 1) break;  // every live row is adjacent to every other
     const Mask nb = adj[best] & alive;
-    for (Mask m = nb; m; m &= m - 1) adj[low(m)] |= nb & ~bit(low(m));
+    const Mask left = alive & ~bit(best);
+    for (Mask m = nb; m; m &= m - 1) {
+      const int v = low(m);
+      adj[v] |= nb & ~bit(v);
+      degree[v] = pop(adj[v] & left);
+    }
     column[k] = nb;
     perm_[k] = static_cast<std::uint8_t>(best);
     alive &= ~bit(best);
@@ -99,6 +106,7 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
   // Sparse columns as position lists (ascending) and runs; the entries of L's pattern to copy.
   int nr = 0, nruns = 0;
   n_copies_ = 0;
+  std::array<Mask, kMaxRows> below_of;  // positions below the diagonal in each sparse column
   const auto copy = [&](int r, int c) {  // positions r >= c
     const unsigned i = rows_[perm_[r]], j = rows_[perm_[c]];
     const std::uint32_t src = i >= j ? i * stride + j : j * stride + i;
@@ -117,6 +125,7 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     run_start_[c] = static_cast<std::uint16_t>(nruns);
     Mask below = 0;  // positions
     for (Mask m = column[c]; m; m &= m - 1) below |= bit(pos[low(m)]);
+    below_of[c] = below;
     for (Mask m = below; m; m &= m - 1) {
       const int r = low(m);
       col_rows_[nr++] = static_cast<std::uint8_t>(r);
@@ -157,11 +166,8 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
   }
   // Copies row by row (runs along a row of both matrices), the sparse part then the tail.
   for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < std::min(r, dense_from_); ++c) {
-      bool in = false;
-      for (int q = col_start_[c]; q < col_start_[c + 1] && !in; ++q) in = col_rows_[q] == r;
-      if (in) copy(r, c);
-    }
+    for (int c = 0; c < std::min(r, dense_from_); ++c)
+      if (below_of[c] >> r & 1) copy(r, c);
     if (r < dense_from_) copy(r, r);
     for (int c = dense_from_; c <= r; ++c) copy(r, c);
   }

@@ -1,4 +1,4 @@
-// Sparse LDLᵀ for the constraint systems of one rigid-body step (up to 64 rows). ODE factorises
+// Sparse LDLᵀ for the constraint systems of one rigid-body step (up to 128 rows). ODE factorises
 // J M⁻¹ Jᵀ densely; for a tree of bodies most of it is zero (rows couple only through a shared
 // body), and in a minimum-degree order the factor stays sparse up to a small dense tail.
 #pragma once
@@ -14,8 +14,11 @@ namespace ernest::dynamics {
 /// choose plans reproducibly (ode_lcp.hpp keeps their patterns in the snapshot).
 class LdltPlan {
  public:
-  static constexpr int kMaxRows = 64;
-  using Mask = std::uint64_t;
+  /// The rover's ~50 rows, and 12 more per wheel on a rock (4 collision points x 3 rows): two
+  /// or more wheels on rocks exceed 64 rows, so row sets are 128-bit masks (GCC's unsigned
+  /// __int128: two words in registers, no allocation). Larger problems go to ODE's solver.
+  static constexpr int kMaxRows = 128;
+  using Mask = unsigned __int128;
 
   /// Rows of the system: A(i, j) = a[rows[i] * stride + rows[j]] for i >= j (lower triangle of
   /// a larger matrix, ODE's layout); pattern[i] has bit j set where that entry is non-zero
@@ -75,6 +78,20 @@ class LdltPlan {
   int n_zeros_ = 0;
   std::array<Zeros, kMaxRows * (kMaxRows + 1) / 2> zeros_{};
 };
+
+/// Rows in a row set; the lowest and the highest row of a non-empty one.
+inline int mask_count(LdltPlan::Mask m) {
+  return __builtin_popcountll(static_cast<std::uint64_t>(m)) +
+         __builtin_popcountll(static_cast<std::uint64_t>(m >> 64));
+}
+inline int mask_low(LdltPlan::Mask m) {
+  const auto lo = static_cast<std::uint64_t>(m);
+  return lo ? __builtin_ctzll(lo) : 64 + __builtin_ctzll(static_cast<std::uint64_t>(m >> 64));
+}
+inline int mask_high(LdltPlan::Mask m) {
+  const auto hi = static_cast<std::uint64_t>(m >> 64);
+  return hi ? 127 - __builtin_clzll(hi) : 63 - __builtin_clzll(static_cast<std::uint64_t>(m));
+}
 
 /// Numeric factorisation with a plan; working data preallocated (never allocates).
 class SparseLdlt {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -308,5 +309,79 @@ TEST(SparseLcp, SolvesContactsThatPushOrSeparateAndHandsFrictionBoundsToOde) {
     }
     dJointGroupDestroy(group);
     dWorldDestroy(w);
+  }
+}
+
+// More than 64 rows (two or more wheels on rocks): row sets are 128-bit masks, so such a step
+// stays on the sparse path (issue 17) and agrees with ODE's Dantzig solver; over 128 rows it
+// goes to ODE. A row of boxes chained by ball joints (3 unbounded rows each), each on 4 contacts
+// (a normal row bounded below by 0 and 2 unbounded friction rows, as emit_obstacles emits a
+// sticking rock contact), pressed down and moving sideways: the contacts push and stop them.
+namespace {
+std::vector<double> step_box_row(int boxes, bool sparse, detail::LcpWorkspace& ws) {
+  dWorldID w = dWorldCreate();
+  dWorldSetGravity(w, 0.0, 0.0, -9.81);
+  dJointGroupID group = dJointGroupCreate(0);
+  std::vector<dBodyID> body;
+  for (int i = 0; i < boxes; ++i) {
+    dBodyID b = dBodyCreate(w);
+    dMass m;
+    dMassSetBoxTotal(&m, 1.0 + 0.1 * i, 0.2, 0.2, 0.2);
+    dBodySetMass(b, &m);
+    dBodySetPosition(b, 0.3 * i, 0.0, 0.1);
+    dBodySetLinearVel(b, 0.0, 0.01, -0.02);
+    for (int k = 0; k < 4; ++k) {
+      dContact c;
+      std::memset(&c, 0, sizeof c);
+      c.geom.pos[0] = 0.3 * i + (k % 2 ? 0.1 : -0.1);
+      c.geom.pos[1] = k / 2 ? 0.1 : -0.1;
+      c.geom.normal[2] = 1.0;
+      c.geom.depth = 1e-3;
+      c.surface.mode = dContactSoftCFM | dContactSoftERP;
+      c.surface.mu = dInfinity;  // friction rows unbounded: the sticking guess (emit_obstacles)
+      c.surface.soft_cfm = 1e-4;
+      c.surface.soft_erp = 0.2;
+      dJointAttach(dJointCreateContact(w, group, &c), b, nullptr);
+    }
+    if (i > 0) {
+      dJointID ball = dJointCreateBall(w, group);
+      dJointAttach(ball, body.back(), b);
+      dJointSetBallAnchor(ball, 0.3 * i - 0.15, 0.0, 0.1);
+    }
+    body.push_back(b);
+  }
+  ws.enabled = sparse;
+  ws.coulomb_friction = true;
+  {
+    const detail::LcpScope scope(&ws);
+    dWorldStep(w, 0.01);
+  }
+  std::vector<double> v;
+  for (dBodyID b : body)
+    for (int k = 0; k < 3; ++k) v.insert(v.end(), {dBodyGetLinearVel(b)[k], dBodyGetAngularVel(b)[k]});
+  dJointGroupDestroy(group);
+  dWorldDestroy(w);
+  return v;
+}
+}  // namespace
+
+TEST(SparseLcp, StepsOfMoreThan64RowsStayOnTheSparsePath) {
+  dInitODE2(0);
+  ASSERT_TRUE(detail::sparse_lcp_active());
+  for (const int boxes : {4, 5, 8, 9}) {  // 15 x boxes - 3 rows: 57, 72, 117, 132
+    SCOPED_TRACE(boxes);
+    detail::LcpWorkspace sparse_ws, dense_ws;
+    const std::vector<double> ours = step_box_row(boxes, true, sparse_ws);
+    const std::vector<double> ode = step_box_row(boxes, false, dense_ws);
+    const bool fits = 15 * boxes - 3 <= LdltPlan::kMaxRows;
+    EXPECT_EQ(sparse_ws.sparse, fits ? 1u : 0u);
+    EXPECT_EQ(sparse_ws.dense, fits ? 0u : 1u);
+    EXPECT_EQ(dense_ws.dense, 1u);
+    double scale = 0.0;
+    for (double x : ode) scale = std::max(scale, std::abs(x));
+    ASSERT_GT(scale, 1e-3);
+    for (std::size_t k = 0; k < ode.size(); ++k) EXPECT_NEAR(ours[k], ode[k], 1e-9 * scale) << k;
+    // the contacts held the boxes: the lateral velocity is gone
+    for (int i = 0; i < boxes; ++i) EXPECT_LT(std::abs(ode[6 * i + 2]), 1e-3) << i;
   }
 }

@@ -1,0 +1,50 @@
+// Driver for instruction-count profiles of the rock scenarios (issue 17): one rover rolling at
+// 0.15 m/s on M90 (friction 0.8 on the rocks) into box rocks read from a file, as
+// bench_dynamics.py's rolling_rover; the 50 steps of run-up are not counted (callgrind's
+// collection is switched on after them when run with --collect-atstart=no and
+// --toggle-collect=profiled_steps). Prints the solver's counts.
+//   python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt
+//   valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*profiled_steps*' \
+//       build/bench/benchmarks/profile_rocks /tmp/rocks20.txt 400 8
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <vector>
+
+#include "ernest/dynamics/rover_sim.hpp"
+
+using namespace ernest::dynamics;
+
+// Not inlined: callgrind switches collection on and off at its entry and exit.
+__attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.step_n(steps); }
+
+int main(int argc, char** argv) {
+  if (argc < 4) {
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1]\n");
+    return 2;
+  }
+  std::vector<BoxObstacle> rocks;
+  std::ifstream in(argv[1]);
+  double cx, cy, cz, sx, sy, sz, yaw;
+  while (in >> cx >> cy >> cz >> sx >> sy >> sz >> yaw)
+    rocks.push_back({Eigen::Vector3d(cx, cy, cz), Eigen::Vector3d(sx, sy, sz), yaw, 0.0, 0.0});
+  SimOptions o;
+  o.friction = 0.8;
+  o.obstacle_substeps = std::atoi(argv[3]);
+  o.guess_obstacle_contacts = argc < 5 || std::atoi(argv[4]) != 0;
+  const double speed = 0.15;
+  RoverSim sim(RoverParameters{}, HeightMap::flat(40, 20, 0.25, 0, -10, -10), rocks, o);
+  sim.reset(0, 0, 0, 0, 0, speed);
+  Commands c;
+  for (auto& w : c.wheel_speed) w = speed / sim.parameters().wheel_radius;
+  sim.set_commands(c);
+  sim.step_n(50);
+  profiled_steps(sim, std::atoi(argv[2]));
+  const SolverStats& s = sim.solver_stats();
+  std::printf("%zu rocks: x %.3f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
+              "bounded %llu; slip solves %llu\n",
+              rocks.size(), sim.state().position.x(), (unsigned long long)s.sparse_solves,
+              (unsigned long long)s.dense_solves, (unsigned long long)s.obstacle_guessed,
+              (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves);
+  return 0;
+}
