@@ -345,10 +345,14 @@ Eigen::VectorXd WalkerSim::wheel_loads() const { return impl_->loads; }
 double WalkerSim::rock_clearance(int leg) const {
   impl_->model.check_leg(leg);
   const walker::WalkerParameters& p = impl_->model.params();
+  const Vec3 centre = impl_->wheel_centre(leg), axle = impl_->wheel_axle(leg);
+  const double wheel_sphere = std::hypot(p.wheel_radius, 0.5 * p.wheel_width);
   double c = kInf;
-  for (const Rock& r : impl_->rocks)
-    c = std::min(c, wheel_rock_clearance(impl_->wheel_centre(leg), impl_->wheel_axle(leg), p.wheel_radius,
-                                         p.wheel_width, r));
+  for (const Rock& r : impl_->rocks) {
+    // Bounding spheres: a rock that cannot come nearer than the best so far is skipped (exact).
+    if ((r.centre - centre).norm() - wheel_sphere - r.half_extents.norm() >= c) continue;
+    c = std::min(c, wheel_rock_clearance(centre, axle, p.wheel_radius, p.wheel_width, r));
+  }
   return c;
 }
 
