@@ -25,6 +25,9 @@ from . import walker_sim as WS
 
 #: Stride of every foot and the body's advance over the cycle [m] (the demo's).
 STRIDE = 0.4
+#: CPS margin a foothold must keep [m]: our choice (the paper gives no number); on six feet every
+#: reachable cell has 0.45–1.0 m, so 0.7 m shows both colours (feet pulled in turn red).
+MIN_MARGIN = 0.7
 
 
 def rock_world(model, seed: int = 3, rocks: int = 60, spacing: float = 0.02):
@@ -48,6 +51,7 @@ def cycle_options(cell: float = 0.02, seed: int = 3, sag_compensation: bool = Tr
     o = WS.FootfallCycleOptions()
     o.stride = stride
     o.step.map.cell = cell
+    o.step.map.min_margin = MIN_MARGIN
     o.step.planner.seed = seed
     o.step.planner.time_limit = 2.0
     o.step.sag_compensation = sag_compensation
@@ -179,6 +183,7 @@ def animate(model, r: WS.FootfallCycleResult, rocks, path: Path, frames: int = 6
     lines_top = [top.plot([], [], "-", color="C3", lw=2)[0] for _ in range(model.legs * model.joints_per_leg)]
     lines_side = [side.plot([], [], "-", color="C3", lw=2)[0] for _ in range(model.legs * model.joints_per_leg)]
     chassis_top, = top.plot([], [], "k-", lw=1.5)
+    chassis_side, = side.plot([], [], "k-", lw=1.5)
     title = fig.suptitle("")
     hips = np.array([np.asarray(model.hip_mount(k))[:3, 3] for k in range(model.legs)] + [
         np.asarray(model.hip_mount(0))[:3, 3]]).T
@@ -192,12 +197,13 @@ def animate(model, r: WS.FootfallCycleResult, rocks, path: Path, frames: int = 6
             ln_s.set_data([p0[0], p1[0]], [p0[2], p1[2]])
         h = b[:3, :3] @ hips + b[:3, 3:4]
         chassis_top.set_data(h[0], h[1])
+        chassis_side.set_data(h[0], h[2])
         title.set_text(f"FootFall gait cycle executed in ODE, t = {t[pick[i]]:.1f} s")
-        return [*lines_top, *lines_side, chassis_top, title]
+        return [*lines_top, *lines_side, chassis_top, chassis_side, title]
 
     fig.tight_layout()
     anim = FuncAnimation(fig, draw, frames=len(pick), blit=False)
-    anim.save(str(path), writer=PillowWriter(fps=fps), dpi=60)
+    anim.save(str(path), writer=PillowWriter(fps=fps), dpi=75)
     plt.close(fig)
     return len(pick)
 

@@ -91,6 +91,17 @@ def _report(out: Path, r: dict) -> None:
             v = c[name]
             lines.append(f"| {name.replace('_', ' ')} | {v['completed']} | {100 * v['min_rock_clearance']:.2f} | "
                          f"{v['executed_advance']:.4f} / {v['planned_advance']:.4f} | {v['wall_seconds']:.1f} |")
+    if "uncompensated" in c and "compensated_quarter_dt" in c:
+        lines += ["", "Per step, executed: the swing wheel's clearance to the rocks and its lowest point over the "
+                  "ground between the compliance waypoints (planned 20 cm above it) [cm]:", "",
+                  "| step | leg | rocks: compensated / without sag compensation / compensated at dt/4 | "
+                  "ground: compensated / without / dt/4 |", "|---|---|---|---|"]
+        for k, (a, b, q) in enumerate(zip(m["steps"], c["uncompensated"]["steps"], c["compensated_quarter_dt"]["steps"])):
+            if a["solved"] and b["solved"] and q["solved"]:
+                lines.append(f"| {k + 1} | {a['leg']} | {100 * a['executed_swing_clearance']:.1f} / "
+                             f"{100 * b['executed_swing_clearance']:.1f} / {100 * q['executed_swing_clearance']:.1f} | "
+                             f"{100 * a['transfer_ground_clearance']:.1f} / {100 * b['transfer_ground_clearance']:.1f} / "
+                             f"{100 * q['transfer_ground_clearance']:.1f} |")
     lines += ["", "![maps](footfall_cycle_maps.png) ![cycle](footfall_cycle.gif)", ""]
     g = r["gait"]
     lines += ["## Skeleton gait and execution in simulation (§5.3.1, §4.1)", "",
