@@ -156,3 +156,18 @@ TEST(FootfallCycle, WithoutSagCompensationTheSwingWheelComesCloserToTheTerrain) 
     EXPECT_GT(b.min_rock_clearance, 0.0);
   }
 }
+
+TEST(FootfallCycle, BadOptionsNameTheField) {
+  const WalkerModel& m = sdm_b();
+  const ernest::dynamics::HeightMap flat = ernest::dynamics::HeightMap::flat(8.0, 8.0, 0.05, 0.0, -4.0, -4.0);
+  FootfallCycleOptions o;
+  o.stride = std::nan("");
+  EXPECT_NE(invalid_argument_message([&] { run_footfall_cycle(m, flat, {}, o); }).find("stride"), std::string::npos);
+  o = FootfallCycleOptions{};
+  o.steps = 7;  // more than the six legs
+  EXPECT_NE(invalid_argument_message([&] { run_footfall_cycle(m, flat, {}, o); }).find("steps"), std::string::npos);
+  o = FootfallCycleOptions{};
+  o.execution.frame_interval = -1.0;
+  EXPECT_NE(invalid_argument_message([&] { run_footfall_cycle(m, flat, {}, o); }).find("frame_interval"),
+            std::string::npos);
+}

@@ -112,3 +112,18 @@ def test_cycle_world_is_one_rock_field():
         c, h = np.asarray(rk.centre), np.asarray(rk.half_extents)
         assert terrain.height(c[0], c[1]) >= c[2] + h[2] - 1e-12
     assert terrain.height(0.0, 0.0) == 0.0  # under the body: no rock within 1.4 m
+
+
+def test_cycle_bad_options_are_value_errors():
+    from ernest_cpp import walker_sim as WS
+
+    model = W.WalkerModel(W.sdm_b_parameters())
+    flat = D.HeightMap.flat(8.0, 8.0, 0.05, 0.0, -4.0, -4.0)
+    o = WS.FootfallCycleOptions()
+    o.stride = float("nan")
+    with pytest.raises(ValueError, match="stride"):
+        WS.run_footfall_cycle(model, flat, [], o)
+    with pytest.raises(ValueError, match="spacing"):
+        mo = WS.RockMapOptions()
+        mo.spacing = 0.0
+        WS.rock_height_map([], mo)
