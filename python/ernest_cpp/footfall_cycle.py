@@ -8,8 +8,9 @@ foothold to the nearest stable rock-free cell, plans the swing against the sag-p
 control and measures every wheel's clearance to every rock. This module builds the world, runs the
 cycle and draws the stability maps and an animation (matplotlib, Agg; GIF by Pillow).
 
-``terrain_hook``: :func:`run` takes any planner terrain (a ``dynamics.HeightMap``); by default the
-rasterised rocks, but a perceived map (stereo, fused) plugs in there unchanged.
+The planner's terrain is a parameter: :func:`run`, :func:`demo` and ``footfall_demo.run`` take any
+``dynamics.HeightMap`` (by default the rasterised rocks; a perceived map, stereo and fused, plugs
+in there unchanged while the simulator keeps the boxes).
 """
 
 from __future__ import annotations
