@@ -17,9 +17,10 @@ struct RockMapOptions {
   double length = 9.0;                    ///< square side [m], (0.1, 200]
   double centre_x = 0.0, centre_y = 0.0;  ///< [m]
   double spacing = 0.02;                  ///< grid step [m], [0.002, 1]
-  /// Footprints grown by this before rasterising [m], [0, 1]: the bilinear surface between an
-  /// inside and an outside node ramps down over one grid step, so a dilation of one step keeps
-  /// the whole box under the map (the planner's terrain then never underestimates a rock).
+  /// Footprints grown by this before rasterising [m], [0, 1]. The bilinear surface at a point
+  /// is set by its cell's four nodes, each within a cell diagonal (√2 spacing) of it: a dilation
+  /// of √2 spacing puts all four at the box top wherever the point lies over the box, so the
+  /// planner's terrain never underestimates a rock (one spacing is not enough for a yawed box).
   double dilation = 0.0;
   void validate() const;
 };

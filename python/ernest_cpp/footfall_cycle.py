@@ -34,8 +34,8 @@ MIN_MARGIN = 0.7
 def rock_world(model, seed: int = 3, rocks: int = 60, spacing: float = 0.02):
     """Box rocks around the standard stance (none within 0.45 m of the feet nor within 1.4 m of the
     body centre; the nominal footholds a stride ahead may be taken, and the planner then moves
-    them) and the planner's height map of the same rocks, footprints dilated by one grid step so
-    the bilinear map never lies below a box. Returns (rocks, terrain, RockFieldOptions)."""
+    them) and the planner's height map of the same rocks, footprints dilated by a grid cell's
+    diagonal so the bilinear map never lies below a box. Returns (rocks, terrain, RockFieldOptions)."""
     body = np.asarray(model.standard_body_pose())
     keep = np.asarray(model.contact_points(body, model.standard_configuration))[:2].copy()
     ro = F.RockFieldOptions()
@@ -43,7 +43,8 @@ def rock_world(model, seed: int = 3, rocks: int = 60, spacing: float = 0.02):
     ro.min_height, ro.max_height, ro.min_radius, ro.max_radius = 0.1, 0.45, 0.1, 0.3
     boxes = WS.box_rock_field(ro, keep)
     mo = WS.RockMapOptions()
-    mo.length, mo.centre_x, mo.centre_y, mo.spacing, mo.dilation = ro.length, ro.centre_x, ro.centre_y, spacing, spacing
+    mo.length, mo.centre_x, mo.centre_y, mo.spacing = ro.length, ro.centre_x, ro.centre_y, spacing
+    mo.dilation = np.sqrt(2.0) * spacing
     return boxes, WS.rock_height_map(boxes, mo), ro
 
 

@@ -36,7 +36,7 @@ World demo_world() {
   World w;
   w.rocks = box_rock_field(ro, keep);
   RockMapOptions mo;
-  mo.length = ro.length, mo.centre_x = ro.centre_x, mo.spacing = 0.02, mo.dilation = 0.02;
+  mo.length = ro.length, mo.centre_x = ro.centre_x, mo.spacing = 0.02, mo.dilation = std::sqrt(2.0) * 0.02;
   w.terrain = rock_height_map(w.rocks, mo);
   return w;
 }
@@ -70,8 +70,9 @@ TEST(RockMap, NodeHeightIsTheBoxTopInsideItsFootprintAndZeroOutside) {
   // the footprint areas (2 hx 2 hy) in nodes, to the raster's resolution
   EXPECT_NEAR(inside * o.spacing * o.spacing, 4 * (0.25 * 0.1 + 0.12 * 0.3), 0.02);
   EXPECT_GT(outside, 10 * inside);
-  // Dilated by one step, the bilinear map never lies below a box anywhere over its footprint.
-  o.dilation = o.spacing;
+  // Dilated by a cell's diagonal, the bilinear map never lies below a box anywhere over its
+  // footprint (by one step only, it does near the corners of a yawed box).
+  o.dilation = std::sqrt(2.0) * o.spacing;
   const ernest::dynamics::HeightMap cover = rock_height_map({a}, o);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
