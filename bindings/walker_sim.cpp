@@ -7,7 +7,9 @@
 #include <memory>
 
 #include "bindings.hpp"
+#include "ernest/walker_sim/footfall_cycle.hpp"
 #include "ernest/walker_sim/gait_execution.hpp"
+#include "ernest/walker_sim/rock_map.hpp"
 #include "ernest/walker_sim/sag_compensation.hpp"
 
 namespace py = pybind11;
@@ -19,6 +21,11 @@ using namespace ernest::walker_sim;
 
 namespace {
 Eigen::Matrix4d mat(const Eigen::Isometry3d& t) { return t.matrix(); }
+std::vector<Eigen::Matrix4d> mats(const std::vector<Eigen::Isometry3d>& ts) {
+  std::vector<Eigen::Matrix4d> out;
+  for (const auto& t : ts) out.push_back(t.matrix());
+  return out;
+}
 }  // namespace
 
 void bind_walker_sim(py::module_& m) {
@@ -94,6 +101,7 @@ void bind_walker_sim(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("joint_speed", &ExecutionOptions::joint_speed, "[rad/s]")
       .def_readwrite("pause", &ExecutionOptions::pause, "hold at each waypoint [s]")
+      .def_readwrite("frame_interval", &ExecutionOptions::frame_interval, "animation frames every [s] (0: none)")
       .def("validate", &ExecutionOptions::validate, "Raise ValueError naming the first invalid field.");
 
   py::class_<ExecutionTrace>(m, "ExecutionTrace", "What the swing wheel did in the simulator.")
@@ -104,12 +112,13 @@ void bind_walker_sim(py::module_& m) {
       .def_readonly("phase", &ExecutionTrace::phase, "segment index, -1 in the first pause")
       .def_readonly("min_rock_clearance", &ExecutionTrace::min_rock_clearance, "[m] (< 0: hit)")
       .def_readonly("min_ground_clearance", &ExecutionTrace::min_ground_clearance, "during the transfer [m]")
-      .def_property_readonly("waypoint_body",
-                             [](const ExecutionTrace& t) {
-                               std::vector<Eigen::Matrix4d> out;
-                               for (const auto& b : t.waypoint_body) out.push_back(b.matrix());
-                               return out;
-                             }, "body pose after each waypoint's pause (4 × 4)")
+      .def_readonly("min_any_rock_clearance", &ExecutionTrace::min_any_rock_clearance, "every wheel [m]")
+      .def_readonly("wheel_path", &ExecutionTrace::wheel_path, "traced wheel centre, 3 × steps [m]")
+      .def_property_readonly("waypoint_body", [](const ExecutionTrace& t) { return mats(t.waypoint_body); },
+                             "body pose after each waypoint's pause (4 × 4)")
+      .def_readonly("frame_time", &ExecutionTrace::frame_time, "[s]")
+      .def_property_readonly("frame_body", [](const ExecutionTrace& t) { return mats(t.frame_body); }, "4 × 4 each")
+      .def_readonly("frame_q", &ExecutionTrace::frame_q, "joints × legs each")
       .def_readonly("final_q", &ExecutionTrace::final_q)
       .def_readonly("simulated_seconds", &ExecutionTrace::simulated_seconds)
       .def_readonly("wall_seconds", &ExecutionTrace::wall_seconds);
@@ -172,6 +181,66 @@ void bind_walker_sim(py::module_& m) {
   m.def("run_sag_scenario", &run_sag_scenario, "model"_a, "options"_a = SagScenarioOptions{},
         py::call_guard<py::gil_scoped_release>(),
         "Plan a swing over a rock against the rigid and the sagged pose, execute both in ODE.");
+
+  py::class_<RockMapOptions>(m, "RockMapOptions", "Grid of rock_height_map: square, spacing, dilation.")
+      .def(py::init<>())
+      .def_readwrite("length", &RockMapOptions::length, "[m]")
+      .def_readwrite("centre_x", &RockMapOptions::centre_x, "[m]")
+      .def_readwrite("centre_y", &RockMapOptions::centre_y, "[m]")
+      .def_readwrite("spacing", &RockMapOptions::spacing, "[m]")
+      .def_readwrite("dilation", &RockMapOptions::dilation, "footprints grown by [m]")
+      .def("validate", &RockMapOptions::validate, "Raise ValueError naming the first invalid field.");
+  m.def("box_rock_field", &box_rock_field, "options"_a, "keep_clear"_a,
+        "Box rocks placed like footfall.rock_field's bumps (footfall.RockFieldOptions).");
+  m.def("rock_height_map", &rock_height_map, "rocks"_a, "options"_a = RockMapOptions{},
+        "The rocks rasterised into the planner's HeightMap: box top inside a footprint, 0 outside.");
+
+  py::class_<FootfallCycleOptions>(m, "FootfallCycleOptions", "A planned and executed FootFall gait cycle.")
+      .def(py::init<>())
+      .def_readwrite("stride", &FootfallCycleOptions::stride, "foot step = body advance per cycle [m]")
+      .def_readwrite("heading", &FootfallCycleOptions::heading, "[rad]")
+      .def_readwrite("foothold_radius", &FootfallCycleOptions::foothold_radius, "rock-free radius [m]")
+      .def_readwrite("flat_tolerance", &FootfallCycleOptions::flat_tolerance, "[m]")
+      .def_readwrite("max_candidates", &FootfallCycleOptions::max_candidates, "footholds tried per step")
+      .def_readwrite("candidate_spacing", &FootfallCycleOptions::candidate_spacing, "between candidates [m]")
+      .def_readwrite("settle_time", &FootfallCycleOptions::settle_time, "[s]")
+      .def_readwrite("steps", &FootfallCycleOptions::steps, "first steps of the cycle to take (0: all)")
+      .def_readwrite("step", &FootfallCycleOptions::step, "footfall.StepOptions")
+      .def_readwrite("sim", &FootfallCycleOptions::sim)
+      .def_readwrite("execution", &FootfallCycleOptions::execution)
+      .def("validate", &FootfallCycleOptions::validate, "joints"_a, "Raise ValueError naming the first invalid field.");
+  py::class_<FootfallStepRecord>(m, "FootfallStepRecord", "One step of the cycle: map, plan, execution.")
+      .def_readonly("leg", &FootfallStepRecord::leg)
+      .def_readonly("map", &FootfallStepRecord::map, "footfall.StabilityMap before the step")
+      .def_readonly("map_seconds", &FootfallStepRecord::map_seconds)
+      .def_readonly("nominal_goal", &FootfallStepRecord::nominal_goal, "[m]")
+      .def_readonly("candidates_tried", &FootfallStepRecord::candidates_tried)
+      .def_readonly("plan", &FootfallStepRecord::plan, "footfall.StepPlan")
+      .def_readonly("planned_wheel", &FootfallStepRecord::planned_wheel, "3 × n, assumed pose [m]")
+      .def_readonly("executed_wheel", &FootfallStepRecord::executed_wheel, "3 × n, simulator [m]")
+      .def_readonly("planned_clearance", &FootfallStepRecord::planned_clearance, "on paper [m]")
+      .def_readonly("swing_rock_clearance", &FootfallStepRecord::swing_rock_clearance, "executed [m]")
+      .def_readonly("min_rock_clearance", &FootfallStepRecord::min_rock_clearance, "every wheel [m]")
+      .def_readonly("transfer_ground_clearance", &FootfallStepRecord::transfer_ground_clearance, "[m]")
+      .def_readonly("body_before", &FootfallStepRecord::body_before, "planned [m]")
+      .def_readonly("body_after", &FootfallStepRecord::body_after, "planned [m]");
+  py::class_<FootfallCycleResult>(m, "FootfallCycleResult", "The planned and executed cycle.")
+      .def_readonly("completed", &FootfallCycleResult::completed)
+      .def_readonly("reason", &FootfallCycleResult::reason)
+      .def_readonly("steps", &FootfallCycleResult::steps)
+      .def_readonly("body_start", &FootfallCycleResult::body_start, "measured [m]")
+      .def_readonly("body_end", &FootfallCycleResult::body_end, "measured [m]")
+      .def_readonly("planned_advance", &FootfallCycleResult::planned_advance, "[m]")
+      .def_readonly("min_rock_clearance", &FootfallCycleResult::min_rock_clearance, "[m]")
+      .def_readonly("frame_time", &FootfallCycleResult::frame_time, "[s]")
+      .def_property_readonly("frame_body", [](const FootfallCycleResult& r) { return mats(r.frame_body); })
+      .def_readonly("frame_q", &FootfallCycleResult::frame_q, "joints × legs each")
+      .def_readonly("planning_seconds", &FootfallCycleResult::planning_seconds)
+      .def_readonly("simulated_seconds", &FootfallCycleResult::simulated_seconds)
+      .def_readonly("simulation_wall_seconds", &FootfallCycleResult::simulation_wall_seconds);
+  m.def("run_footfall_cycle", &run_footfall_cycle, "model"_a, "terrain"_a, "rocks"_a,
+        "options"_a = FootfallCycleOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "Plan (on `terrain`) and execute (among `rocks`) one reverse-wave gait cycle from the standard stance.");
 }
 
 }  // namespace ernest::bindings

@@ -77,6 +77,7 @@ double planned_clearance(const walker::WalkerModel& model, const Eigen::Isometry
 void ExecutionOptions::validate() const {
   require_in_range("ExecutionOptions", "joint_speed", joint_speed, 1e-6, 10.0);
   require_in_range("ExecutionOptions", "pause", pause, 0.0, 60.0);
+  require_in_range("ExecutionOptions", "frame_interval", frame_interval, 0.0, 60.0);
 }
 
 ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::vector<Eigen::MatrixXd>& path,
@@ -91,10 +92,12 @@ ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::ve
   const double dt = sim.options().dt, start = sim.time();
   const int last = static_cast<int>(path.size()) - 1;
   Eigen::MatrixXd target = path[0], rate = Eigen::MatrixXd::Zero(path[0].rows(), path[0].cols());
-  std::vector<double> time, rock, ground, height;
+  std::vector<double> time, rock, ground, height, frame_time;
   std::vector<int> phase;
+  std::vector<Eigen::Vector3d> wheel;
   ExecutionTrace out;
-  out.min_rock_clearance = out.min_ground_clearance = kInf;
+  out.min_rock_clearance = out.min_ground_clearance = out.min_any_rock_clearance = kInf;
+  double next_frame = 0.0;
   // in_air: the transfer, from arriving at waypoint 1 to leaving waypoint last - 1
   auto record = [&](int seg, bool in_air) {
     time.push_back(sim.time() - start);
@@ -103,6 +106,15 @@ ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::ve
     height.push_back(sim.body_pose().translation().z());
     phase.push_back(seg);
     out.min_rock_clearance = std::min(out.min_rock_clearance, rock.back());
+    for (int k = 0; k < model.legs(); ++k)
+      out.min_any_rock_clearance = std::min(out.min_any_rock_clearance, k == leg ? rock.back() : sim.rock_clearance(k));
+    if (leg >= 0) wheel.push_back(sim.wheel_centres().col(leg));
+    if (options.frame_interval > 0.0 && time.back() >= next_frame - 1e-9) {
+      frame_time.push_back(time.back());
+      out.frame_body.push_back(sim.body_pose());
+      out.frame_q.push_back(sim.joint_angles());
+      next_frame += options.frame_interval;
+    }
     if (in_air) out.min_ground_clearance = std::min(out.min_ground_clearance, ground.back());
   };
   auto pause = [&](int waypoint) {
@@ -133,6 +145,9 @@ ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::ve
   out.ground_clearance = Eigen::Map<const Eigen::VectorXd>(ground.data(), n);
   out.body_height = Eigen::Map<const Eigen::VectorXd>(height.data(), n);
   out.phase = Eigen::Map<const Eigen::VectorXi>(phase.data(), n);
+  out.frame_time = Eigen::Map<const Eigen::VectorXd>(frame_time.data(), static_cast<Eigen::Index>(frame_time.size()));
+  out.wheel_path.resize(3, static_cast<Eigen::Index>(wheel.size()));
+  for (std::size_t i = 0; i < wheel.size(); ++i) out.wheel_path.col(static_cast<Eigen::Index>(i)) = wheel[i];
   out.final_q = sim.joint_angles();
   out.simulated_seconds = sim.time() - start;
   out.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

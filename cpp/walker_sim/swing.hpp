@@ -29,6 +29,9 @@ double planned_clearance(const walker::WalkerModel& model, const Eigen::Isometry
 struct ExecutionOptions {
   double joint_speed = 0.5;   ///< fastest joint along each segment [rad/s], (0, 10]
   double pause = 0.6;         ///< hold at every waypoint (the robot settles) [s], [0, 60]
+  /// Record the whole robot (body pose, joint angles) every this many seconds for animations;
+  /// 0: never, [0, 60].
+  double frame_interval = 0.0;
   void validate() const;
 };
 
@@ -41,11 +44,18 @@ struct ExecutionTrace {
   /// (-1 in the first pause).
   Eigen::VectorXi phase;
   double min_rock_clearance = 0.0;   ///< over the whole motion [m] (< 0: the wheel hit a rock)
+  /// Every wheel (the stance wheels too) to the nearest rock over the whole motion [m].
+  double min_any_rock_clearance = 0.0;
+  Eigen::Matrix3Xd wheel_path;       ///< the traced wheel's centre at every step (world) [m]
   /// Over the transfer (after the first lift waypoint is reached, before the last one is left),
   /// when the wheel should be in the air [m].
   double min_ground_clearance = 0.0;
   std::vector<Eigen::Isometry3d> waypoint_body;  ///< body pose at the end of each waypoint's pause
   Eigen::MatrixXd final_q;           ///< measured joints at the end
+  /// Frames every options.frame_interval: time [s] from the start, body pose, joints × legs.
+  Eigen::VectorXd frame_time;
+  std::vector<Eigen::Isometry3d> frame_body;
+  std::vector<Eigen::MatrixXd> frame_q;
   double simulated_seconds = 0.0, wall_seconds = 0.0;
 };
 

@@ -346,10 +346,20 @@ Eigen::VectorXd WalkerSim::wheel_loads() const { return impl_->loads; }
 double WalkerSim::rock_clearance(int leg) const {
   impl_->model.check_leg(leg);
   const walker::WalkerParameters& p = impl_->model.params();
-  double c = kInf;
-  for (const Rock& r : impl_->rocks)
-    c = std::min(c, wheel_rock_clearance(impl_->wheel_centre(leg), impl_->wheel_axle(leg), p.wheel_radius,
-                                         p.wheel_width, r));
+  const Vec3 centre = impl_->wheel_centre(leg), axle = impl_->wheel_axle(leg);
+  // Bounding spheres give each rock a lower bound on its clearance: FCL runs first on the rock
+  // with the smallest bound, then only on rocks whose bound is below the best so far (exact).
+  const double wheel_sphere = std::hypot(p.wheel_radius, 0.5 * p.wheel_width);
+  auto bound = [&](const Rock& r) { return (r.centre - centre).norm() - wheel_sphere - r.half_extents.norm(); };
+  const std::vector<Rock>& rocks = impl_->rocks;
+  std::size_t first = 0;
+  for (std::size_t i = 1; i < rocks.size(); ++i)
+    if (bound(rocks[i]) < bound(rocks[first])) first = i;
+  if (rocks.empty()) return kInf;
+  double c = wheel_rock_clearance(centre, axle, p.wheel_radius, p.wheel_width, rocks[first]);
+  for (std::size_t i = 0; i < rocks.size(); ++i)
+    if (i != first && bound(rocks[i]) < c)
+      c = std::min(c, wheel_rock_clearance(centre, axle, p.wheel_radius, p.wheel_width, rocks[i]));
   return c;
 }
 

@@ -85,13 +85,45 @@ def test_errors_and_no_plan(scene):
 
 def test_footfall_command_small(tmp_path):
     out = tmp_path / "ff"
-    assert main(["footfall", "--out", str(out), "--steps", "2", "--cell", "0.06", "--rocks", "8"]) == 0
+    assert main(["footfall", "--out", str(out), "--cell", "0.06", "--no-variants"]) == 0
     r = json.loads((out / "footfall.json").read_text())
-    assert len(r["steps"]) == 2 and r["steps"][0]["leg"] == 0
-    assert any(s["solved"] for s in r["steps"])
-    for s in r["steps"]:
-        if s["solved"]:
-            assert s["smoothed_length"] <= s["raw_length"] + 1e-9 and s["hip_sag_cm"] > 0
-            assert (out / f"step{s['step']}_leg{s['leg']}_path.png").exists()
-        assert (out / f"step{s['step']}_leg{s['leg']}_map.png").exists()
+    c = r["cycle"]["compensated"]
+    assert c["completed"], c["reason"]
+    assert [s["leg"] for s in c["steps"]] == [0, 1, 5, 2, 4, 3]  # the reverse wave, +x
+    assert c["min_rock_clearance"] > 0 and abs(c["executed_advance"] - c["planned_advance"]) < 0.01
+    for k, s in enumerate(c["steps"]):
+        assert s["smoothed_length"] <= s["raw_length"] + 1e-9 and s["swing_hip_sag"] > 0
+        assert (out / f"step{k + 1}_leg{s['leg']}_path.png").exists()
+    gif = out / "footfall_cycle.gif"
+    assert 10_000 < gif.stat().st_size < 3_000_000 and gif.read_bytes()[:6] == b"GIF89a"
+    assert (out / "footfall_cycle_maps.png").stat().st_size > 20_000
     assert "| step | leg |" in (out / "footfall_report.md").read_text()
+
+
+def test_cycle_world_is_one_rock_field():
+    """The planner's map is the simulator's boxes: at every box centre it reads the box top, and
+    a point a grid step outside every (dilated) footprint reads the ground."""
+    from ernest_cpp import footfall_cycle
+
+    model = W.WalkerModel(W.sdm_b_parameters())
+    rocks, terrain, _ = footfall_cycle.rock_world(model)
+    assert len(rocks) == 60
+    for rk in rocks:
+        c, h = np.asarray(rk.centre), np.asarray(rk.half_extents)
+        assert terrain.height(c[0], c[1]) >= c[2] + h[2] - 1e-12
+    assert terrain.height(0.0, 0.0) == 0.0  # under the body: no rock within 1.4 m
+
+
+def test_cycle_bad_options_are_value_errors():
+    from ernest_cpp import walker_sim as WS
+
+    model = W.WalkerModel(W.sdm_b_parameters())
+    flat = D.HeightMap.flat(8.0, 8.0, 0.05, 0.0, -4.0, -4.0)
+    o = WS.FootfallCycleOptions()
+    o.stride = float("nan")
+    with pytest.raises(ValueError, match="stride"):
+        WS.run_footfall_cycle(model, flat, [], o)
+    with pytest.raises(ValueError, match="spacing"):
+        mo = WS.RockMapOptions()
+        mo.spacing = 0.0
+        WS.rock_height_map([], mo)
