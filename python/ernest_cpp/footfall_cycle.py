@@ -49,9 +49,12 @@ def rock_world(model, seed: int = 3, rocks: int = 60, spacing: float = 0.02):
 
 
 def cycle_options(cell: float = 0.02, seed: int = 3, sag_compensation: bool = True, dt: float | None = None,
-                  frame_interval: float = 0.0, stride: float = STRIDE) -> WS.FootfallCycleOptions:
+                  frame_interval: float = 0.0, stride: float = STRIDE,
+                  flat_tolerance: float | None = None) -> WS.FootfallCycleOptions:
     o = WS.FootfallCycleOptions()
     o.stride = stride
+    if flat_tolerance is not None:
+        o.flat_tolerance = flat_tolerance
     o.step.map.cell = cell
     o.step.map.min_margin = MIN_MARGIN
     o.step.planner.seed = seed
@@ -211,7 +214,7 @@ def animate(model, r: WS.FootfallCycleResult, rocks, path: Path, frames: int = 6
 
 
 def demo(out_dir, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants: bool = True, log=print,
-         terrain=None) -> dict:
+         terrain=None, flat_tolerance: float | None = None) -> dict:
     """The cycle with sag compensation (maps, animation) and, with ``variants``, the same world
     with it off and the compensated cycle again at a quarter of the physics step. ``terrain``: the
     planner's HeightMap (default: the rocks rasterised). Writes footfall_cycle_maps.png and
@@ -229,7 +232,7 @@ def demo(out_dir, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants: 
     runs = {}
     for name, kw in cases:
         t0 = time.perf_counter()
-        r = run(model, terrain, boxes, cycle_options(cell=cell, seed=seed, **kw))
+        r = run(model, terrain, boxes, cycle_options(cell=cell, seed=seed, flat_tolerance=flat_tolerance, **kw))
         runs[name] = (r, summary(r), time.perf_counter() - t0)
         s = runs[name][1]
         log(f"[footfall] cycle ({name}): {'completed' if s['completed'] else 'stopped: ' + s['reason']}, "
@@ -245,10 +248,15 @@ def demo(out_dir, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants: 
     r = runs["compensated"][0]
     t0 = time.perf_counter()
     plot_maps(model, r, boxes, out / "footfall_cycle_maps.png")
-    frames = animate(model, r, boxes, out / "footfall_cycle.gif")
-    log(f"[footfall] cycle figures: maps and a {frames}-frame GIF ({time.perf_counter() - t0:.1f} s)")
+    frames = 0
+    if len(r.frame_time):
+        frames = animate(model, r, boxes, out / "footfall_cycle.gif")
+        log(f"[footfall] cycle figures: maps and a {frames}-frame GIF ({time.perf_counter() - t0:.1f} s)")
+    else:  # the cycle stopped before its first step: nothing was executed to animate
+        (out / "footfall_cycle.gif").unlink(missing_ok=True)
+        log(f"[footfall] cycle figures: maps only, no GIF (nothing executed) ({time.perf_counter() - t0:.1f} s)")
     result = {name: v[1] | {"wall_seconds": v[2]} for name, v in runs.items()}
     result.update(rocks=len(boxes), seed=seed, cell=cell, dt=WS.WalkerSimOptions().dt, stride=STRIDE,
-                  gif_bytes=(out / "footfall_cycle.gif").stat().st_size, gif_frames=frames)
+                  gif_bytes=(out / "footfall_cycle.gif").stat().st_size if frames else 0, gif_frames=frames)
     result.update(_result=r, _model=model, _terrain=terrain)
     return result

@@ -23,6 +23,10 @@ from . import footfall as F
 from . import footfall_terrain
 
 
+#: relief allowed around a foothold on a stereo-derived map [m] (FootfallCycleOptions.flat_tolerance)
+STEREO_FLAT_TOLERANCE = 0.05
+
+
 def run(out: Path, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants: bool = True, log=print,
         terrain=None, terrain_source: str = "truth") -> dict:
     """The executed gait cycle around rocks (``footfall_cycle``), the skeleton gait and the Moses
@@ -38,14 +42,19 @@ def run(out: Path, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants:
     from . import footfall_cycle
     from . import walker as W
 
+    flat_tolerance = None  # the cycle's default (1 mm): exact on the rasterised rocks
     if terrain is None and terrain_source != "truth":
         log(f"[footfall] the planner's terrain from {terrain_source}: mast stereo pan over the rocks ...")
         walker = W.WalkerModel(W.sdm_b_parameters())
         _, truth, _ = footfall_cycle.rock_world(walker, seed=seed, rocks=rocks)
         terrain = footfall_terrain.planner_terrain(terrain_source, truth,
                                                    np.asarray(walker.standard_body_pose()))
+        # a stereo map is never flat to 1 mm (its noise, raised by k sigma); the rocks stand
+        # 10-45 cm, so 5 cm of relief around a foothold still means no rock under the wheel
+        flat_tolerance = STEREO_FLAT_TOLERANCE
 
-    cycle = footfall_cycle.demo(out, seed=seed, cell=cell, rocks=rocks, variants=variants, log=log, terrain=terrain)
+    cycle = footfall_cycle.demo(out, seed=seed, cell=cell, rocks=rocks, variants=variants, log=log, terrain=terrain,
+                                flat_tolerance=flat_tolerance)
     r, model, planner_terrain = cycle.pop("_result"), cycle.pop("_model"), cycle.pop("_terrain")
     for k, s in enumerate(r.steps):
         if s.plan.solved:
@@ -115,7 +124,8 @@ def _report(out: Path, r: dict) -> None:
                              f"{100 * b['executed_swing_clearance']:.1f} / {100 * q['executed_swing_clearance']:.1f} | "
                              f"{100 * a['transfer_ground_clearance']:.1f} / {100 * b['transfer_ground_clearance']:.1f} / "
                              f"{100 * q['transfer_ground_clearance']:.1f} |")
-    lines += ["", "![maps](footfall_cycle_maps.png) ![cycle](footfall_cycle.gif)", ""]
+    gif = " ![cycle](footfall_cycle.gif)" if c["gif_frames"] else " (stopped before any step: no animation)"
+    lines += ["", "![maps](footfall_cycle_maps.png)" + gif, ""]
     g = r["gait"]
     lines += ["## Skeleton gait and execution in simulation (§5.3.1, §4.1)", "",
               f"Reverse-wave order {g['sequence']} on flat ground, {len(g['step_lengths'])} cycles: step lengths "
@@ -163,7 +173,8 @@ def _main(args: argparse.Namespace) -> int:
         raise SystemExit("ernest footfall: need 0.005 <= --cell <= 0.5 and --rocks >= 0")
     r = run(args.out, args.seed, args.cell, args.rocks, args.variants, terrain_source=args.terrain)
     c = r["cycle"]["compensated"]
-    print(f"wrote {args.out}/footfall_report.md, footfall.json, footfall_cycle.gif and "
+    gif = "footfall_cycle.gif and " if r["cycle"]["gif_frames"] else ""
+    print(f"wrote {args.out}/footfall_report.md, footfall.json, {gif}"
           f"{len(list(args.out.glob('*.png')))} PNGs (cycle {'completed' if c['completed'] else 'stopped'}, "
           f"min wheel-rock clearance {100 * c['min_rock_clearance']:.1f} cm, {r['seconds']:.1f} s)")
     return 0

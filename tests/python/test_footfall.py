@@ -127,3 +127,21 @@ def test_cycle_bad_options_are_value_errors():
         mo = WS.RockMapOptions()
         mo.spacing = 0.0
         WS.rock_height_map([], mo)
+
+
+def test_cycle_that_cannot_start_writes_maps_and_no_gif(tmp_path):
+    """A planner map with no reachable ground (a plateau 3 m above the feet) stops the cycle at its
+    first step with the reason; the command's figures are still written, without an animation of
+    nothing. The foothold relief tolerance reaches C++ (and is range-checked there)."""
+    from ernest_cpp import footfall_cycle
+
+    plateau = D.HeightMap.flat(8.0, 8.0, 0.05, 3.0, -3.5, -4.0)
+    r = footfall_cycle.demo(tmp_path, cell=0.08, rocks=5, variants=False, log=lambda *_: None,
+                            terrain=plateau, flat_tolerance=0.05)
+    c = r["compensated"]
+    assert not c["completed"] and "foothold" in c["reason"]
+    assert r["gif_frames"] == 0 and not (tmp_path / "footfall_cycle.gif").exists()
+    assert (tmp_path / "footfall_cycle_maps.png").exists()
+    with pytest.raises(ValueError, match="flat_tolerance"):
+        footfall_cycle.demo(tmp_path, cell=0.08, rocks=5, variants=False, log=lambda *_: None,
+                            flat_tolerance=-0.01)
