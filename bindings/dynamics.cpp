@@ -304,7 +304,13 @@ void bind_dynamics(py::module_& m) {
       });
 
   py::class_<Snapshot>(m, "Snapshot", "Complete simulation state for RoverSim.restore().")
-      .def_property_readonly("time", [](const Snapshot& s) { return s.state.time; });
+      .def_property_readonly("time", [](const Snapshot& s) { return s.state.time; },
+                             "Simulation time of the snapshot [s].")
+      .def_property_readonly("state", [](const Snapshot& s) { return s.state; },
+                             "The rover's state when the snapshot was taken (a copy of RoverState, "
+                             "the same type as RoverSim.state).")
+      .def_property_readonly("commands", [](const Snapshot& s) { return s.commands; },
+                             "The actuator set-points held when the snapshot was taken (a copy).");
 
   py::class_<RoverSim, std::shared_ptr<RoverSim>>(
       m, "RoverSim",

@@ -195,6 +195,10 @@ class RoverState:
 class Snapshot:
     @property
     def time(self) -> float: ...
+    @property
+    def state(self) -> RoverState: ...
+    @property
+    def commands(self) -> Commands: ...
 
 class RoverSim:
     """One thread at a time per RoverSim: a concurrent call raises RuntimeError (no waiting)."""

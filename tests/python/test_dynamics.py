@@ -102,10 +102,18 @@ def test_snapshot_restore_exact():
     sim.set_commands(c)
     sim.step_n(30)
     snap = sim.snapshot()
+    at_snap = sim.state
     sim.step_n(50)
     a = sim.state_vector()
+    # The snapshot's state is the canonical RoverState of the moment it was taken, not the
+    # simulator's current one; its commands are the held set-points.
+    assert isinstance(snap.state, D.RoverState)
+    np.testing.assert_array_equal(snap.state.position, at_snap.position)
+    assert snap.state.time == snap.time == at_snap.time != sim.state.time
+    assert list(snap.commands.wheel_speed) == [1.0, 1.1, 1.0, 0.9]
     sim.restore(snap)
     assert sim.state.time == pytest.approx(snap.time)
+    np.testing.assert_array_equal(sim.state.position, snap.state.position)
     sim.step_n(50)
     np.testing.assert_array_equal(sim.state_vector(), a)
 
