@@ -1,7 +1,7 @@
 // Internal to cpp/dynamics: the ODE model behind RoverSim, as a model (RoverModel: built once,
 // never re-created) and its data (RoverData: what a step reads and writes). rover_sim.cpp builds
-// and places it, rover_step.cpp advances it, rover_sim_api.cpp is RoverSim's API over it. Not part
-// of the embedding API (no stability promise).
+// and places it, rover_step.cpp and obstacle_contacts.cpp advance it, rover_sim_api.cpp is
+// RoverSim's API over it. Not part of the embedding API (no stability promise).
 #pragma once
 
 #include <ode/ode.h>
@@ -255,11 +255,17 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   // rover_sim.cpp
   void build();
   void place(double x, double y, double heading, double psi, double phi, double speed);
-  // rover_step.cpp
+  // obstacle_contacts.cpp: the step (substeps on obstacles), the obstacles' contacts, the bodies
+  // saved for the attempts
   void step();
-  void step_once();
   void set_step_length(double length);
   bool touching_obstacles();
+  void prepare_obstacles();
+  void near(dGeomID a, dGeomID b);
+  void save_bodies();
+  void restore_bodies();
+  // rover_step.cpp
+  void step_once();
   void gimbal_angles(double& psi, double& phi, double& psid, double& phid, Vec3& ez,
                      Vec3& ea) const;
   void prepare_actuators(double psi, double phi);
@@ -275,8 +281,6 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   void soil_levels(int wheel);
   bool solve_rows(detail::RowStates& guess, detail::RowStates& next, detail::RowStates& tried,
                   int& attempts);
-  void prepare_obstacles();
-  void near(dGeomID a, dGeomID b);
   void emit_obstacles(detail::RowModes modes);
   bool settle_obstacles(detail::RowModes modes);
   struct DriveRow {
@@ -295,8 +299,6 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   bool settle_rigid(int wheel, detail::RowModes modes, const Vec3& patch_velocity,
                     detail::RowStates& next);
   void commit_rigid();
-  void save_bodies();
-  void restore_bodies();
   void read_outputs(double dt_done);
   void check_divergence();
   void check_forces_before_step();
