@@ -4,52 +4,164 @@
 // against the obstacles'), the contact's ODE surface parameters, the step length's ERP / CFM and
 // the bodies saved and restored between the attempts of a step. The rows are emitted and checked
 // in rover_rigid.cpp (emit_obstacles, settle_obstacles); the step itself is rover_step.cpp.
+#include "ernest/dynamics/obstacle_contacts.hpp"
+
 #include <algorithm>
 #include <cmath>
-#include <cstring>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include "ernest/dynamics/rover_sim_impl.hpp"
 
 namespace ernest::dynamics {
 
 using namespace detail;
-void RoverSim::Impl::near(dGeomID a, dGeomID b) {
-  dContact cs[kMaxContactsPerPair];
-  std::memset(cs, 0, sizeof cs);
-  const int n = dCollide(a, b, kMaxContactsPerPair, &cs[0].geom, sizeof(dContact));
-  if (n <= 0) return;
-  // The §3.4 stiffness is per wheel–obstacle contact: n simultaneous points share it, and so they
-  // share the force-dependent slip (n points in parallel, each slipping at slip * n * its force,
-  // slip at rigid_slip * total force). Per point, the contact's compliance would change with how
-  // many points ODE's collider happens to return (4 or 6 for a wheel against a box edge, with
-  // the step: benchmarks/RESULTS.md, "step independence").
-  const double cfm = contact_cfm * n;
-  const double slip = opt.rigid_slip * n;
-  const dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
-  std::int8_t wheel = -1;
-  bool first = true;
-  for (int i = 0; i < 4; ++i) {
-    if (ba == body[2 + i]) wheel = static_cast<std::int8_t>(i);
-    if (bb == body[2 + i]) wheel = static_cast<std::int8_t>(i), first = false;
+
+namespace detail {
+
+dContactGeom merge_contact_points(const dContactGeom* points, int n) {
+  dContactGeom m = points[0];
+  double wsum = 0.0, deepest = 0.0;
+  for (int k = 0; k < n; ++k) {
+    wsum += std::max(points[k].depth, 0.0);
+    deepest = std::max(deepest, points[k].depth);
   }
+  Vec3 x = Vec3::Zero(), nrm = Vec3::Zero();
+  for (int k = 0; k < n; ++k) {
+    const double w = wsum > 0.0 ? std::max(points[k].depth, 0.0) / wsum : 1.0 / n;
+    x += w * to_vec(points[k].pos);
+    nrm += w * to_vec(points[k].normal);
+  }
+  // Opposite normals cancelling would leave no direction: keep the deepest point's then.
+  const double len = nrm.norm();
+  if (len > 1e-6) {
+    nrm /= len;
+    for (int i = 0; i < 3; ++i) m.normal[i] = nrm[i];
+  } else {
+    for (int k = 1; k < n; ++k)
+      if (points[k].depth > m.depth) m.normal[0] = points[k].normal[0],
+                                      m.normal[1] = points[k].normal[1],
+                                      m.normal[2] = points[k].normal[2];
+  }
+  for (int i = 0; i < 3; ++i) m.pos[i] = x[i];
+  m.depth = deepest;
+  return m;
+}
+
+SpringDamperRow spring_damper_row(double k, double c, double h, double mass_bound) {
+  SpringDamperRow r;
+  const double omega_h = std::sqrt(k / mass_bound) * h;
+  r.explicit_spring = c > 0.0 && omega_h <= kMaxExplicitOmegaH;  // NaN mass: implicit
+  if (r.explicit_spring) {  // lambda = k depth(start) - c v_n'
+    r.erp = h * k / c;
+    r.cfm = 1.0 / c;
+  } else {  // lambda = k depth(end) - c v_n' (as RigidContactParameters::erp / cfm)
+    r.erp = h * k / (h * k + c);
+    r.cfm = 1.0 / (h * k + c);
+  }
+  return r;
+}
+
+}  // namespace detail
+
+// A lower bound of the effective mass [kg] a contact row (at x along n) on rover body b sees:
+// 1 / (j M^-1 j^T) with the step's constraints, bounded by dropping constraints (a constraint
+// removes a positive semidefinite term from the row's inverse mass, the Schur complement of
+// the rows J M^-1 J^T: without it the contact is lighter). A wheel: the wheel and its parent
+// (bogie or chassis) held by the hinge (3 rows at its anchor, the wheel centre, and 2 against
+// rotation off the axle), the spin free (its drive at its torque limit), the parent free in
+// space. Another body: itself, free. Fixed-size arithmetic: no allocation.
+double RoverSim::Impl::contact_mass_bound(int b, const Vec3& x, const Vec3& n) const {
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  const auto inv_mass = [&](int i, Mat6& m) {  // [v; w] of body i, world frame
+    dMass dm;
+    dBodyGetMass(body[i], &dm);
+    const Mat3 r = rot(i), in = to_mat(dm.I);
+    m.setZero();
+    m.topLeftCorner<3, 3>() = Mat3::Identity() / dm.mass;
+    m.bottomRightCorner<3, 3>() = r * in.inverse() * r.transpose();
+  };
+  Mat6 mw;
+  inv_mass(b, mw);
+  Eigen::Matrix<double, 6, 1> j;
+  j << n, (x - pos(b)).cross(n);
+  if (b < 2) return 1.0 / j.dot(mw * j);
+  const int parent = parent_of(b - 2);
+  Mat6 mp;
+  inv_mass(parent, mp);
+  const Vec3 axle = axle_world(b - 2), rpw = pos(b) - pos(parent);
+  Vec3 u1 = axle.unitOrthogonal(), u2 = axle.cross(u1);
+  Eigen::Matrix<double, 6, 12> jac = Eigen::Matrix<double, 6, 12>::Zero();  // contact; hinge
+  jac.block<1, 6>(0, 0) = j.transpose();
+  for (int i = 0; i < 3; ++i) {  // v_w - (v_p + w_p x r_pw) = 0
+    const Vec3 e = Vec3::Unit(i);
+    jac.block<1, 3>(1 + i, 0) = e.transpose();
+    jac.block<1, 3>(1 + i, 6) = -e.transpose();
+    jac.block<1, 3>(1 + i, 9) = -rpw.cross(e).transpose();
+  }
+  jac.block<1, 3>(4, 3) = u1.transpose();
+  jac.block<1, 3>(4, 9) = -u1.transpose();
+  jac.block<1, 3>(5, 3) = u2.transpose();
+  jac.block<1, 3>(5, 9) = -u2.transpose();
+  Eigen::Matrix<double, 12, 12> minv = Eigen::Matrix<double, 12, 12>::Zero();
+  minv.topLeftCorner<6, 6>() = mw;
+  minv.bottomRightCorner<6, 6>() = mp;
+  const Mat6 a = jac * minv * jac.transpose();
+  const Eigen::Matrix<double, 5, 1> ah = a.block<5, 1>(1, 0);
+  const double s = a(0, 0) - ah.dot(a.bottomRightCorner<5, 5>().ldlt().solve(ah));
+  return 1.0 / s;
+}
+
+// One contact per rover-body–obstacle pair (merge_contact_points, obstacle_contacts.hpp), with the
+// §3.4 spring–damper and Coulomb friction mu; its ERP / CFM are set by set_obstacle_rows().
+void RoverSim::Impl::near(dGeomID a, dGeomID b) {
+  dContactGeom points[kMaxContactsPerPair];
+  const int n = dCollide(a, b, kMaxContactsPerPair, points, sizeof(dContactGeom));
+  if (n <= 0) return;
+  const dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
+  int rover = -1;
+  bool first = true;
+  for (int i = 0; i < 6; ++i) {
+    if (ba == body[i]) rover = i;
+    if (bb == body[i]) rover = i, first = false;
+  }
+  if (rover < 0) return;  // never: the obstacles' space holds no rover geom
   const dGeomID rock = first ? b : a;  // distinct obstacles touched (SolverStats)
   if (std::find(touched.begin(), touched.begin() + n_touched, rock) == touched.begin() + n_touched &&
       n_touched < static_cast<int>(touched.size()))
     touched[n_touched++] = rock;
-  for (int k = 0; k < n && n_obstacle_contacts < kMaxObstacleContacts; ++k) {
-    dContact& c = obstacle_contact[n_obstacle_contacts];
-    c = cs[k];
-    c.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
-                     dContactSlip2;
-    c.surface.slip1 = c.surface.slip2 = slip;
-    c.surface.mu = mu;
-    c.surface.soft_erp = contact_erp;
-    c.surface.soft_cfm = cfm;
-    obstacle_bodies[2 * n_obstacle_contacts] = ba;
-    obstacle_bodies[2 * n_obstacle_contacts + 1] = bb;
-    obstacle_wheel[n_obstacle_contacts] = wheel;
-    obstacle_wheel_first[n_obstacle_contacts] = first;
-    ++n_obstacle_contacts;
+  if (n_obstacle_contacts >= kMaxObstacleContacts) return;
+  const int k = n_obstacle_contacts++;
+  dContact& c = obstacle_contact[k];
+  c = dContact{};
+  c.geom = merge_contact_points(points, n);
+  // The force-dependent slip of the friction rows (SimOptions::rigid_slip), per contact.
+  c.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
+                   dContactSlip2;
+  c.surface.slip1 = c.surface.slip2 = opt.rigid_slip;
+  c.surface.mu = mu;
+  obstacle_bodies[2 * k] = ba;
+  obstacle_bodies[2 * k + 1] = bb;
+  obstacle_body[k] = static_cast<std::int8_t>(rover);
+  obstacle_wheel[k] = static_cast<std::int8_t>(rover >= 2 ? rover - 2 : -1);
+  obstacle_wheel_first[k] = first;
+  obstacle_mass[k] = contact_mass_bound(rover, to_vec(c.geom.pos), to_vec(c.geom.normal));
+}
+
+// The obstacle rows' ERP / CFM at the step length h (spring_damper_row, obstacle_contacts.hpp).
+// A rover body pressed by m obstacles at once carries m springs in parallel: the stability test
+// takes its contacts' mass bound over m (omega = sqrt(m k / mass)).
+void RoverSim::Impl::set_obstacle_rows() {
+  std::array<int, 6> pairs{};
+  for (int k = 0; k < n_obstacle_contacts; ++k) ++pairs[obstacle_body[k]];
+  for (int k = 0; k < n_obstacle_contacts; ++k) {
+    const SpringDamperRow r = spring_damper_row(opt.rigid.stiffness, opt.rigid.damping, h,
+                                                obstacle_mass[k] / pairs[obstacle_body[k]]);
+    dSurfaceParameters& s = obstacle_contact[k].surface;
+    s.soft_erp = r.erp;
+    s.soft_cfm = r.cfm;
+    obstacle_explicit[k] = r.explicit_spring;
   }
 }
 
@@ -57,23 +169,36 @@ void RoverSim::Impl::prepare_obstacles() {
   n_obstacle_contacts = 0;
   n_touched = 0;
   if (obstacle_geoms.empty()) return;
+  // Broad phase: the rover's bounding box against each obstacle's (static: ODE caches it), then
+  // the rover's geoms against the few obstacles it overlaps. dSpaceCollide2 of the two simple
+  // spaces tested every rover geom against every obstacle (6 x 100 box tests a call: 10 % of a
+  // step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps").
   // Never let an exception cross ODE's C callback: capture it and rethrow after the collision.
-  dSpaceCollide2(
-      reinterpret_cast<dGeomID>(rover_space), reinterpret_cast<dGeomID>(obstacle_space), this,
-      [](void* data, dGeomID a, dGeomID b) {
-        auto* self = static_cast<Impl*>(data);
-        if (self->callback_error) return;
-        try {
-          self->near(a, b);
-        } catch (...) {
-          self->callback_error = std::current_exception();
-        }
-      });
+  const auto callback = [](void* data, dGeomID a, dGeomID b) {
+    auto* self = static_cast<Impl*>(data);
+    if (self->callback_error) return;
+    try {
+      self->near(a, b);
+    } catch (...) {
+      self->callback_error = std::current_exception();
+    }
+  };
+  const dGeomID rover = reinterpret_cast<dGeomID>(rover_space);
+  dReal box[6], ob[6];
+  dGeomGetAABB(rover, box);
+  for (const dGeomID g : obstacle_geoms) {
+    dGeomGetAABB(g, ob);
+    if (ob[0] > box[1] || ob[1] < box[0] || ob[2] > box[3] || ob[3] < box[2] || ob[4] > box[5] ||
+        ob[5] < box[4])
+      continue;
+    dSpaceCollide2(rover, g, this, callback);
+  }
   if (callback_error) {
     std::exception_ptr e = callback_error;
     callback_error = nullptr;
     std::rethrow_exception(e);
   }
+  set_obstacle_rows();
 }
 
 void RoverSim::Impl::save_bodies() {
@@ -102,8 +227,8 @@ void RoverSim::Impl::restore_bodies() {
   }
 }
 
-// The §3.4 spring–dampers (obstacles, rigid ground, the tyre's tangential springs) as ODE's
-// ERP / CFM for a step of the given length.
+// The §3.4 spring–dampers of rigid ground and the tyre's tangential springs as ODE's ERP / CFM
+// for a step of the given length (the obstacles': set_obstacle_rows()).
 void RoverSim::Impl::set_step_length(double length) {
   h = length;
   contact_erp = opt.rigid.erp(h);
@@ -139,16 +264,10 @@ void RoverSim::Impl::step() {
     step_once();
     return;
   }
-  // The contacts just collected are the first substep's (same poses): only their §3.4
-  // compliance changes with the step length. A pair of m points has soft_cfm = m * contact_cfm
-  // (near()); recover m and recompute as near() does, so that this is bit for bit a collision.
-  const double full_cfm = contact_cfm;
+  // The contacts just collected are the first substep's (same poses): only their §3.4 rows
+  // change with the step length.
   set_step_length(opt.dt / n);
-  for (int k = 0; k < n_obstacle_contacts; ++k) {
-    dSurfaceParameters& s = obstacle_contact[k].surface;
-    s.soft_erp = contact_erp;
-    s.soft_cfm = contact_cfm * static_cast<double>(std::lround(s.soft_cfm / full_cfm));
-  }
+  set_obstacle_rows();
   obstacles_collected = true;  // later substeps collide again (step_once)
   const Vec3 force = pending_force;
   for (int k = 0; k < n; ++k) {

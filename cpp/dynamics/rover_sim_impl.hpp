@@ -170,7 +170,8 @@ struct RoverData {
   // The step being taken: its length and the §3.4 spring–dampers as ERP / CFM at it.
   double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
   bool obstacles_collected = false;  // step() found this step's obstacle contacts already
-  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at h
+  // §3.4 spring–damper as ERP / CFM at h, implicit (rigid ground; obstacles: set_obstacle_rows)
+  double contact_erp = 0.0, contact_cfm = 0.0;
   // The tyre's along x and y on rigid ground (rover_rigid.cpp).
   std::array<double, 2> tangential_erp{}, tangential_cfm{};
   // Buffers ODE writes the joints' forces into (registered with the joints by build()).
@@ -201,6 +202,12 @@ struct RoverData {
   // equals it between steps: a step without contacts keeps it); points of a
   // sticking wheel found carrying no normal force, emitted without friction rows (obstacle_off).
   std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_wheel{};
+  // Each contact's rover body (0-5), a lower bound of its effective mass along the normal
+  // (contact_mass_bound) and whether its §3.4 spring is explicit at this step length
+  // (set_obstacle_rows; obstacle_contacts.hpp).
+  std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_body{};
+  std::array<double, detail::kMaxObstacleContacts> obstacle_mass{};
+  std::array<bool, detail::kMaxObstacleContacts> obstacle_explicit{};
   std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
   std::array<dJointFeedback, detail::kMaxObstacleContacts> obstacle_fb{};
   std::array<RowState, 4> obstacle_mode{}, obstacle_try{}, obstacle_next{};
@@ -262,6 +269,8 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   bool touching_obstacles();
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);
+  double contact_mass_bound(int body, const Vec3& point, const Vec3& normal) const;
+  void set_obstacle_rows();
   void save_bodies();
   void restore_bodies();
   // rover_step.cpp

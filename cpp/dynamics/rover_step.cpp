@@ -405,6 +405,8 @@ void RoverSim::Impl::step_once() {
       bounded = bounded || obstacle_wheel[k] < 0 || obstacle_try[obstacle_wheel[k]] != RowState::Free ||
                 !opt.guess_obstacle_contacts;
     ++(bounded ? stats.obstacle_bounded : stats.obstacle_guessed);
+    for (int k = 0; k < n_obstacle_contacts; ++k)
+      ++(obstacle_explicit[k] ? stats.obstacle_explicit : stats.obstacle_implicit);
   }
   obstacle_mode = obstacle_next;
   ++stats.steps;
