@@ -96,11 +96,15 @@ def main(argv=None) -> int:
                     help="only this controller's rows (repeatable), e.g. --controller 'learned policy'")
     ap.add_argument("--course", action="append",
                     help="only the courses whose label contains this (repeatable), e.g. --course Bickler")
+    ap.add_argument("--obstacle-substeps", type=int, default=0,
+                    help="SimOptions.obstacle_substeps for every episode (0: the simulator's default)")
     ap.add_argument("--perturb", type=float, default=1e-3,
                     help="force-sensor perturbation of the ensembles' episodes [N] (standard deviation)")
     args = ap.parse_args(argv)
     if args.ensemble < 0 or args.learned_ensemble < 0 or args.ensemble == 1 or args.learned_ensemble == 1:
         ap.error("--ensemble and --learned-ensemble must be 0 or at least 2")
+    if args.obstacle_substeps < 0:
+        ap.error("--obstacle-substeps must be >= 0")
     if not (args.perturb >= 0 and math.isfinite(args.perturb)):
         ap.error("--perturb must be a finite force >= 0 N")
     dt = _dyn.SimOptions().dt
@@ -114,6 +118,8 @@ def main(argv=None) -> int:
     all_ok, n_unresolved = True, 0
     t_start = time.perf_counter()
     for label, env_id, kwargs in evaluate.COURSES:
+        if args.obstacle_substeps:
+            kwargs = dict(kwargs, obstacle_substeps=args.obstacle_substeps)
         if args.course and not any(c in label for c in args.course):
             continue
         for name, (pol, passive) in ctrls.items():
