@@ -71,8 +71,9 @@ SpringDamperRow spring_damper_row(double k, double c, double h, double mass_boun
 // the rows J M^-1 J^T: without it the contact is lighter). A wheel: the wheel and its parent
 // (bogie or chassis) held by the hinge (3 rows at its anchor, the wheel centre, and 2 against
 // rotation off the axle), the spin free (its drive at its torque limit), the parent free in
-// space. Another body: itself, free. Fixed-size arithmetic: no allocation.
-double RoverSim::Impl::contact_mass_bound(int b, const Vec3& x, const Vec3& n) const {
+// space. Another body, or with hinged false: itself, free (a lower bound again, cheaper).
+// Fixed-size arithmetic: no allocation.
+double RoverSim::Impl::contact_mass_bound(int b, const Vec3& x, const Vec3& n, bool hinged) const {
   using Mat6 = Eigen::Matrix<double, 6, 6>;
   const auto inv_mass = [&](int i, Mat6& m) {  // [v; w] of body i, world frame
     dMass dm;
@@ -86,7 +87,7 @@ double RoverSim::Impl::contact_mass_bound(int b, const Vec3& x, const Vec3& n) c
   inv_mass(b, mw);
   Eigen::Matrix<double, 6, 1> j;
   j << n, (x - pos(b)).cross(n);
-  if (b < 2) return 1.0 / j.dot(mw * j);
+  if (b < 2 || !hinged) return 1.0 / j.dot(mw * j);
   const int parent = parent_of(b - 2);
   Mat6 mp;
   inv_mass(parent, mp);
@@ -146,7 +147,8 @@ void RoverSim::Impl::near(dGeomID a, dGeomID b) {
   obstacle_body[k] = static_cast<std::int8_t>(rover);
   obstacle_wheel[k] = static_cast<std::int8_t>(rover >= 2 ? rover - 2 : -1);
   obstacle_wheel_first[k] = first;
-  obstacle_mass[k] = contact_mass_bound(rover, to_vec(c.geom.pos), to_vec(c.geom.normal));
+  obstacle_hinged[k] = false;
+  obstacle_mass[k] = contact_mass_bound(rover, to_vec(c.geom.pos), to_vec(c.geom.normal), false);
 }
 
 // The obstacle rows' ERP / CFM at the step length h (spring_damper_row, obstacle_contacts.hpp).
@@ -160,11 +162,29 @@ void RoverSim::Impl::near(dGeomID a, dGeomID b) {
 // that grows without bound.
 void RoverSim::Impl::set_obstacle_rows() {
   const auto assembly = [](int b) { return b == kBogie || b == 2 || b == 3 ? 0 : 1; };
+  const double k_spring = opt.rigid.stiffness;
   std::array<double, 2> inverse_mass{};
-  for (int k = 0; k < n_obstacle_contacts; ++k)
-    inverse_mass[assembly(obstacle_body[k])] += 1.0 / obstacle_mass[k];
+  const auto sum = [&] {
+    inverse_mass = {};
+    for (int k = 0; k < n_obstacle_contacts; ++k)
+      inverse_mass[assembly(obstacle_body[k])] += 1.0 / obstacle_mass[k];
+  };
+  sum();
+  // near() bounded each wheel's contact with the wheel alone; where that is too light for the
+  // explicit spring, bound it again with the wheel's parent through the hinge (heavier, dearer).
+  bool refined = false;
   for (int k = 0; k < n_obstacle_contacts; ++k) {
-    const SpringDamperRow r = spring_damper_row(opt.rigid.stiffness, opt.rigid.damping, h,
+    const int b = obstacle_body[k];
+    if (b < 2 || obstacle_hinged[k] ||
+        std::sqrt(k_spring * inverse_mass[assembly(b)]) * h <= kMaxExplicitOmegaH)
+      continue;
+    const dContactGeom& g = obstacle_contact[k].geom;
+    obstacle_mass[k] = contact_mass_bound(b, to_vec(g.pos), to_vec(g.normal), true);
+    obstacle_hinged[k] = refined = true;
+  }
+  if (refined) sum();
+  for (int k = 0; k < n_obstacle_contacts; ++k) {
+    const SpringDamperRow r = spring_damper_row(k_spring, opt.rigid.damping, h,
                                                 1.0 / inverse_mass[assembly(obstacle_body[k])]);
     dSurfaceParameters& s = obstacle_contact[k].surface;
     s.soft_erp = r.erp;
@@ -177,7 +197,7 @@ void RoverSim::Impl::prepare_obstacles() {
   n_obstacle_contacts = 0;
   n_touched = 0;
   if (obstacle_geoms.empty()) return;
-  // Broad phase: the rover's bounding box against each obstacle's (static: ODE caches it), then
+  // Broad phase: the rover's bounding box against each obstacle's (static: taken once by build()), then
   // the rover's geoms against the few obstacles it overlaps. dSpaceCollide2 of the two simple
   // spaces tested every rover geom against every obstacle (6 x 100 box tests a call: 10 % of a
   // step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps").
@@ -192,14 +212,14 @@ void RoverSim::Impl::prepare_obstacles() {
     }
   };
   const dGeomID rover = reinterpret_cast<dGeomID>(rover_space);
-  dReal box[6], ob[6];
+  dReal box[6];
   dGeomGetAABB(rover, box);
-  for (const dGeomID g : obstacle_geoms) {
-    dGeomGetAABB(g, ob);
+  for (std::size_t i = 0; i < obstacle_geoms.size(); ++i) {
+    const std::array<double, 6>& ob = obstacle_aabb[i];
     if (ob[0] > box[1] || ob[1] < box[0] || ob[2] > box[3] || ob[3] < box[2] || ob[4] > box[5] ||
         ob[5] < box[4])
       continue;
-    dSpaceCollide2(rover, g, this, callback);
+    dSpaceCollide2(rover, obstacle_geoms[i], this, callback);
   }
   if (callback_error) {
     std::exception_ptr e = callback_error;

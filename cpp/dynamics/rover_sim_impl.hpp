@@ -134,6 +134,7 @@ struct RoverModel {
   dJointID gimbal = nullptr;        // universal joint with the stops
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
   std::vector<dGeomID> obstacle_geoms;
+  std::vector<std::array<double, 6>> obstacle_aabb;  // their bounding boxes (ODE's order)
 };
 
 // The data (pinocchio's Data): everything a step reads and writes. The state a Snapshot carries
@@ -203,10 +204,11 @@ struct RoverData {
   // sticking wheel found carrying no normal force, emitted without friction rows (obstacle_off).
   std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_wheel{};
   // Each contact's rover body (0-5), a lower bound of its effective mass along the normal
-  // (contact_mass_bound) and whether its §3.4 spring is explicit at this step length
-  // (set_obstacle_rows; obstacle_contacts.hpp).
+  // (contact_mass_bound; hinged: with the wheel's parent) and whether its §3.4 spring is explicit
+  // at this step length (set_obstacle_rows; obstacle_contacts.hpp).
   std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_body{};
   std::array<double, detail::kMaxObstacleContacts> obstacle_mass{};
+  std::array<bool, detail::kMaxObstacleContacts> obstacle_hinged{};
   std::array<bool, detail::kMaxObstacleContacts> obstacle_explicit{};
   std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
   std::array<dJointFeedback, detail::kMaxObstacleContacts> obstacle_fb{};
@@ -269,7 +271,7 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   bool touching_obstacles();
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);
-  double contact_mass_bound(int body, const Vec3& point, const Vec3& normal) const;
+  double contact_mass_bound(int body, const Vec3& point, const Vec3& normal, bool hinged) const;
   void set_obstacle_rows();
   void save_bodies();
   void restore_bodies();
