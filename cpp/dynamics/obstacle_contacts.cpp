@@ -1,8 +1,9 @@
 // ERNEST on ODE: the obstacle contacts of a step (seed 004 §3.4: the rigid wheel–obstacle
 // contact, a linear spring–damper with Coulomb friction) and the substeps of a step that touches
-// an obstacle (SimOptions::obstacle_substeps). Collision (dSpaceCollide2 of the rover's space
-// against the obstacles'), the contact's ODE surface parameters, the step length's ERP / CFM and
-// the bodies saved and restored between the attempts of a step. The rows are emitted and checked
+// an obstacle (SimOptions::obstacle_substeps). Collision (a broad phase, then dSpaceCollide2 of
+// the rover's space against each obstacle it may touch), one contact per rover-body–obstacle
+// pair, its §3.4 rows' ERP / CFM (obstacle_contacts.hpp) and the bodies saved and restored
+// between the attempts of a step. The rows are emitted and checked
 // in rover_rigid.cpp (emit_obstacles, settle_obstacles); the step itself is rover_step.cpp.
 #include "ernest/dynamics/obstacle_contacts.hpp"
 
@@ -37,18 +38,19 @@ dContactGeom merge_contact_points(const dContactGeom* points, int n) {
   const double len = nrm.norm();
   if (len > 1e-6) {
     nrm /= len;
-    for (int i = 0; i < 3; ++i) m.normal[i] = nrm[i];
   } else {
+    int d = 0;
     for (int k = 1; k < n; ++k)
-      if (points[k].depth > m.depth) m.normal[0] = points[k].normal[0],
-                                      m.normal[1] = points[k].normal[1],
-                                      m.normal[2] = points[k].normal[2];
+      if (points[k].depth > points[d].depth) d = k;
+    nrm = to_vec(points[d].normal);
   }
+  for (int i = 0; i < 3; ++i) m.normal[i] = nrm[i];
   for (int i = 0; i < 3; ++i) m.pos[i] = x[i];
   m.depth = deepest;
   return m;
 }
 
+// Seed 004 §3.4's spring k and damper c as a contact row (obstacle_contacts.hpp).
 SpringDamperRow spring_damper_row(double k, double c, double h, double mass_bound) {
   SpringDamperRow r;
   const double omega_h = std::sqrt(k / mass_bound) * h;
@@ -114,8 +116,8 @@ double RoverSim::Impl::contact_mass_bound(int b, const Vec3& x, const Vec3& n, b
   return 1.0 / s;
 }
 
-// One contact per rover-body–obstacle pair (merge_contact_points, obstacle_contacts.hpp), with the
-// §3.4 spring–damper and Coulomb friction mu; its ERP / CFM are set by set_obstacle_rows().
+// One contact per rover-body–obstacle pair (merge_contact_points, obstacle_contacts.hpp), with
+// the §3.4 spring–damper and Coulomb friction mu; its ERP / CFM are set by set_obstacle_rows().
 void RoverSim::Impl::near(dGeomID a, dGeomID b) {
   dContactGeom points[kMaxContactsPerPair];
   const int n = dCollide(a, b, kMaxContactsPerPair, points, sizeof(dContactGeom));
@@ -197,10 +199,10 @@ void RoverSim::Impl::prepare_obstacles() {
   n_obstacle_contacts = 0;
   n_touched = 0;
   if (obstacle_geoms.empty()) return;
-  // Broad phase: the rover's bounding box against each obstacle's (static: taken once by build()), then
-  // the rover's geoms against the few obstacles it overlaps. dSpaceCollide2 of the two simple
-  // spaces tested every rover geom against every obstacle (6 x 100 box tests a call: 10 % of a
-  // step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps").
+  // Broad phase: the rover's bounding box against each obstacle's (static: taken once by
+  // build()), then the rover's geoms against the few obstacles it overlaps. dSpaceCollide2 of the
+  // two simple spaces tested every rover geom against every obstacle (6 x 100 box tests a call:
+  // 10 % of a step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps").
   // Never let an exception cross ODE's C callback: capture it and rethrow after the collision.
   const auto callback = [](void* data, dGeomID a, dGeomID b) {
     auto* self = static_cast<Impl*>(data);
