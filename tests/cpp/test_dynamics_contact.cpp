@@ -156,6 +156,32 @@ TEST(ObstacleContact, BallOscillatesAtTheSpringsFrequencyAndDamping) {
   EXPECT_NEAR(b.mean / xs, 1.0, 0.01);
 }
 
+TEST(ObstacleContact, MergedPointIsDepthWeighted) {
+  dContactGeom p[3]{};
+  const double depth[3] = {1e-3, 3e-3, 0.0};
+  for (int k = 0; k < 3; ++k) {
+    p[k].pos[0] = k;  // x = 0, 1, 2
+    p[k].normal[2] = 1.0;
+    p[k].depth = depth[k];
+  }
+  p[1].normal[0] = 1.0;  // (1, 0, 1) at the deepest point
+  dContactGeom m = detail::merge_contact_points(p, 3);
+  EXPECT_DOUBLE_EQ(m.pos[0], 0.75);  // weights 1/4, 3/4, 0
+  EXPECT_DOUBLE_EQ(m.depth, 3e-3);
+  EXPECT_NEAR(m.normal[0], 0.75 / std::hypot(0.75, 1.0), 1e-15);
+  EXPECT_NEAR(m.normal[2], 1.0 / std::hypot(0.75, 1.0), 1e-15);
+  // no depth anywhere: the plain mean; normals cancelling: the deepest point's
+  for (auto& q : p) q.depth = 0.0;
+  EXPECT_DOUBLE_EQ(detail::merge_contact_points(p, 3).pos[0], 1.0);
+  p[0].depth = 2e-3;
+  p[0].normal[2] = 1.0;
+  p[1].depth = 2e-3 - 1e-9;
+  p[1].normal[0] = 0.0;
+  p[1].normal[2] = -1.0;
+  m = detail::merge_contact_points(p, 2);
+  EXPECT_EQ(m.normal[2], 1.0);
+}
+
 TEST(ObstacleContact, LightBodiesFallBackToTheImplicitSpring) {
   using detail::spring_damper_row;
   const double k = kRigid.stiffness, c = kRigid.damping, h = kDt;
