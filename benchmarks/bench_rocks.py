@@ -4,12 +4,13 @@ rover drives 0.15 m/s on M90 through two fields: low flat rocks that the wheels 
 (their contacts stick: the guessed path) and 100 box rocks that stop the rover (a wheel spinning
 against a rock face slides: ODE's bounded contact); every step is timed on its own and binned by
 the rocks in contact. Each step in contact is obstacle_substeps = 8 substeps
-(issue 13); "substeps off" is timed too. Reference in the same run: the same rover with the rock
+(issues 13 and 17); "substeps off" is timed too. Reference in the same run: the same rover with the rock
 contacts always solved with their friction bounds (SimOptions.guess_obstacle_contacts = False,
 ODE's pivoting solver, as before issue 17), on the same rocks; and the cost of an empty call
 from Python (step_n(0)), which every timed step includes.
 
     python benchmarks/bench_rocks.py [--steps 2400]
+    python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt   # for profile_rocks.cpp
 """
 
 import argparse
@@ -56,9 +57,19 @@ def run(rocks, steps: int, substeps: int, guess: bool):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=2400, help="steps per run (30 s at 0.0125 s)")
-    ap.add_argument("--substeps", type=int, nargs="+", default=[8, 1],
-                    help="SimOptions.obstacle_substeps values to time (8: default)")
+    ap.add_argument("--substeps", type=int, nargs="+", default=[D.SimOptions().obstacle_substeps, 1],
+                    help="SimOptions.obstacle_substeps values to time (default: the default, and 1)")
+    ap.add_argument("--dump-rocks", nargs=2, metavar=("N", "FILE"),
+                    help="write bench_dynamics.py's N rocks (rock_field(N, seed=7, length=2, width=2, "
+                         "x0=0.8)) to FILE, one 'cx cy cz sx sy sz yaw' a line, for "
+                         "benchmarks/profile_rocks.cpp, and exit")
     args = ap.parse_args()
+    if args.dump_rocks:
+        n, path = int(args.dump_rocks[0]), args.dump_rocks[1]
+        with open(path, "w") as f:
+            for r in D.rock_field(n, seed=7, length=2.0, width=2.0, x0=0.8):
+                f.write(" ".join(f"{v:.17g}" for v in (*r.centre, *r.size, r.yaw)) + "\n")
+        return 0
     fields = {"low flat rocks (rolled over)": low_rocks(60),
               "rock_field(100, seed=7, length=2, x0=0.8) (stalls)":
                   D.rock_field(100, seed=7, length=2.0, width=2.0, x0=0.8)}

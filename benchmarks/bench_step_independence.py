@@ -7,6 +7,7 @@ within the targets (2 percentage points of travel reduction, 5 % of cost of tran
     ./run bench step_independence                # default policy, seed 0
     ./run bench step_independence --seeds 0 1 2  # more episodes (the same seeds at both steps)
     ./run bench step_independence --ensemble 24  # every row: means over 24 perturbed episodes
+    ./run bench step_independence --policy '' --course Bickler --course Mixed  # the obstacle rows
 
 The evaluation courses are noise-free: one episode per step is one deterministic trajectory. The
 passive bogie and the crawling gait are open loop (they never read the force sensors) and are
@@ -93,11 +94,17 @@ def main(argv=None) -> int:
                     help="the learned policy's rows: means over N perturbed episodes (0: single episodes)")
     ap.add_argument("--controller", action="append",
                     help="only this controller's rows (repeatable), e.g. --controller 'learned policy'")
+    ap.add_argument("--course", action="append",
+                    help="only the courses whose label contains this (repeatable), e.g. --course Bickler")
+    ap.add_argument("--obstacle-substeps", type=int, default=0,
+                    help="SimOptions.obstacle_substeps for every episode (0: the simulator's default)")
     ap.add_argument("--perturb", type=float, default=1e-3,
                     help="force-sensor perturbation of the ensembles' episodes [N] (standard deviation)")
     args = ap.parse_args(argv)
     if args.ensemble < 0 or args.learned_ensemble < 0 or args.ensemble == 1 or args.learned_ensemble == 1:
         ap.error("--ensemble and --learned-ensemble must be 0 or at least 2")
+    if args.obstacle_substeps < 0:
+        ap.error("--obstacle-substeps must be >= 0")
     if not (args.perturb >= 0 and math.isfinite(args.perturb)):
         ap.error("--perturb must be a finite force >= 0 N")
     dt = _dyn.SimOptions().dt
@@ -111,6 +118,10 @@ def main(argv=None) -> int:
     all_ok, n_unresolved = True, 0
     t_start = time.perf_counter()
     for label, env_id, kwargs in evaluate.COURSES:
+        if args.obstacle_substeps:
+            kwargs = dict(kwargs, obstacle_substeps=args.obstacle_substeps)
+        if args.course and not any(c in label for c in args.course):
+            continue
         for name, (pol, passive) in ctrls.items():
             if args.controller and name not in args.controller:
                 continue

@@ -285,6 +285,11 @@ void bind_dynamics(py::module_& m) {
                     "steps (substeps) with obstacle contacts all solved sticking (sparse path)")
       .def_readonly("obstacle_bounded", &SolverStats::obstacle_bounded,
                     "steps (substeps) with an obstacle contact solved with its friction bounds")
+      .def_readonly("obstacle_explicit", &SolverStats::obstacle_explicit,
+                    "obstacle contacts (per step or substep) whose spring was integrated explicitly")
+      .def_readonly("obstacle_implicit", &SolverStats::obstacle_implicit,
+                    "obstacle contacts (per step or substep) whose spring was integrated implicitly "
+                    "(effective mass too light for the explicit spring at the step)")
       .def_readonly("obstacles_touched", &SolverStats::obstacles_touched,
                     "distinct obstacles in contact at the start of the last step")
       .def_readonly("fast_lcp", &SolverStats::fast_lcp,
@@ -299,7 +304,9 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.dense_solves) + ", slip_solves=" +
                std::to_string(s.slip_solves) + ", obstacle_guessed=" +
                std::to_string(s.obstacle_guessed) + ", obstacle_bounded=" +
-               std::to_string(s.obstacle_bounded) + ", fast_lcp=" +
+               std::to_string(s.obstacle_bounded) + ", obstacle_explicit=" +
+               std::to_string(s.obstacle_explicit) + ", obstacle_implicit=" +
+               std::to_string(s.obstacle_implicit) + ", fast_lcp=" +
                (s.fast_lcp ? "True" : "False") + ")";
       });
 

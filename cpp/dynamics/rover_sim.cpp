@@ -276,6 +276,9 @@ void RoverSim::Impl::build() {
     dGeomSetPosition(gb, b.centre.x(), b.centre.y(), b.centre.z());
     dGeomSetRotation(gb, r);
     obstacle_geoms.push_back(gb);
+    std::array<double, 6> aabb;  // static: the broad phase's (obstacle_contacts.cpp)
+    dGeomGetAABB(gb, aabb.data());
+    obstacle_aabb.push_back(aabb);
   }
 
   // Nominal placement so that joints are created in a consistent pose. place() tilts the chassis

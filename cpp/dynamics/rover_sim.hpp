@@ -93,10 +93,13 @@ struct SimOptions {
   double slip_force_tolerance = 0.1;
   /// A step in which a wheel touches an obstacle (a box or rock) is taken as this many substeps
   /// of dt / n. The §3.4 contact (20 kN/m, 20 N s/m on a 3 kg wheel assembly: 82 rad/s, damping
-  /// ratio 0.025) is under-resolved at the default step: ODE's ERP/CFM integrate it implicitly,
-  /// which adds a damping of stiffness * dt (500 N s/m at 0.025 s, 25x the tyre's), and a wheel
-  /// spinning against a box face settles where at dt / 8 and below it climbs and falls back
-  /// (benchmarks/RESULTS.md, "step independence"). 1 = no substeps.
+  /// ratio 0.04) is integrated with its spring explicit and its damper implicit where the
+  /// contact's effective mass allows (cpp/dynamics/obstacle_contacts.hpp: no numerical damping),
+  /// by ODE's implicit ERP/CFM elsewhere. The passive bogie spinning its wheels against a box
+  /// face (the Bickler trap, the wheel-high step) climbs and falls back at fine steps and settles
+  /// at coarse ones; the wheel-high step needs steps of dt / 8 for it even with the explicit
+  /// spring, so something else than the normal spring limits the step there
+  /// (benchmarks/RESULTS.md, "Rock contacts without substeps"). 1 = no substeps.
   int obstacle_substeps = 8;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
@@ -192,6 +195,12 @@ struct SolverStats {
   /// (ODE's friction bounded by mu times the normal force: its pivoting solver).
   std::uint64_t obstacle_guessed = 0;
   std::uint64_t obstacle_bounded = 0;
+  /// Obstacle contacts (one per rover body and obstacle touching, per step or substep) whose
+  /// §3.4 spring was integrated explicitly (no numerical damping), and those integrated
+  /// implicitly because a lower bound of their effective mass was too light for the explicit
+  /// spring at the step (cpp/dynamics/obstacle_contacts.hpp).
+  std::uint64_t obstacle_explicit = 0;
+  std::uint64_t obstacle_implicit = 0;
   /// Distinct obstacles in contact with the rover at the start of the last step (not a count).
   int obstacles_touched = 0;
   /// Solves can take the sparse path: SimOptions::sparse_lcp and the solver hook works in this

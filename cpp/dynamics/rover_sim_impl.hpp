@@ -1,7 +1,7 @@
 // Internal to cpp/dynamics: the ODE model behind RoverSim, as a model (RoverModel: built once,
 // never re-created) and its data (RoverData: what a step reads and writes). rover_sim.cpp builds
-// and places it, rover_step.cpp advances it, rover_sim_api.cpp is RoverSim's API over it. Not part
-// of the embedding API (no stability promise).
+// and places it, rover_step.cpp and obstacle_contacts.cpp advance it, rover_sim_api.cpp is
+// RoverSim's API over it. Not part of the embedding API (no stability promise).
 #pragma once
 
 #include <ode/ode.h>
@@ -134,6 +134,7 @@ struct RoverModel {
   dJointID gimbal = nullptr;        // universal joint with the stops
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
   std::vector<dGeomID> obstacle_geoms;
+  std::vector<std::array<double, 6>> obstacle_aabb;  // their bounding boxes (ODE's order)
 };
 
 // The data (pinocchio's Data): everything a step reads and writes. The state a Snapshot carries
@@ -170,7 +171,8 @@ struct RoverData {
   // The step being taken: its length and the §3.4 spring–dampers as ERP / CFM at it.
   double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
   bool obstacles_collected = false;  // step() found this step's obstacle contacts already
-  double contact_erp = 0.0, contact_cfm = 0.0;  // §3.4 spring–damper as ERP / CFM at h
+  // §3.4 spring–damper as ERP / CFM at h, implicit (rigid ground; obstacles: set_obstacle_rows)
+  double contact_erp = 0.0, contact_cfm = 0.0;
   // The tyre's along x and y on rigid ground (rover_rigid.cpp).
   std::array<double, 2> tangential_erp{}, tangential_cfm{};
   // Buffers ODE writes the joints' forces into (registered with the joints by build()).
@@ -201,6 +203,13 @@ struct RoverData {
   // equals it between steps: a step without contacts keeps it); points of a
   // sticking wheel found carrying no normal force, emitted without friction rows (obstacle_off).
   std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_wheel{};
+  // Each contact's rover body (0-5), a lower bound of its effective mass along the normal
+  // (contact_mass_bound; hinged: with the wheel's parent) and whether its §3.4 spring is explicit
+  // at this step length (set_obstacle_rows; obstacle_contacts.hpp).
+  std::array<std::int8_t, detail::kMaxObstacleContacts> obstacle_body{};
+  std::array<double, detail::kMaxObstacleContacts> obstacle_mass{};
+  std::array<bool, detail::kMaxObstacleContacts> obstacle_hinged{};
+  std::array<bool, detail::kMaxObstacleContacts> obstacle_explicit{};
   std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
   std::array<dJointFeedback, detail::kMaxObstacleContacts> obstacle_fb{};
   std::array<RowState, 4> obstacle_mode{}, obstacle_try{}, obstacle_next{};
@@ -255,11 +264,19 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   // rover_sim.cpp
   void build();
   void place(double x, double y, double heading, double psi, double phi, double speed);
-  // rover_step.cpp
+  // obstacle_contacts.cpp: the step (substeps on obstacles), the obstacles' contacts, the bodies
+  // saved for the attempts
   void step();
-  void step_once();
   void set_step_length(double length);
   bool touching_obstacles();
+  void prepare_obstacles();
+  void near(dGeomID a, dGeomID b);
+  double contact_mass_bound(int body, const Vec3& point, const Vec3& normal, bool hinged) const;
+  void set_obstacle_rows();
+  void save_bodies();
+  void restore_bodies();
+  // rover_step.cpp
+  void step_once();
   void gimbal_angles(double& psi, double& phi, double& psid, double& phid, Vec3& ez,
                      Vec3& ea) const;
   void prepare_actuators(double psi, double phi);
@@ -275,8 +292,6 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   void soil_levels(int wheel);
   bool solve_rows(detail::RowStates& guess, detail::RowStates& next, detail::RowStates& tried,
                   int& attempts);
-  void prepare_obstacles();
-  void near(dGeomID a, dGeomID b);
   void emit_obstacles(detail::RowModes modes);
   bool settle_obstacles(detail::RowModes modes);
   struct DriveRow {
@@ -295,8 +310,6 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   bool settle_rigid(int wheel, detail::RowModes modes, const Vec3& patch_velocity,
                     detail::RowStates& next);
   void commit_rigid();
-  void save_bodies();
-  void restore_bodies();
   void read_outputs(double dt_done);
   void check_divergence();
   void check_forces_before_step();

@@ -142,6 +142,8 @@ class SolverStats:
     slip_solves: int
     obstacle_guessed: int
     obstacle_bounded: int
+    obstacle_explicit: int
+    obstacle_implicit: int
     obstacles_touched: int
     fast_lcp: bool
 

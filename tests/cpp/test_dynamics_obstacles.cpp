@@ -62,7 +62,8 @@ TEST(ObstacleContacts, GuessedStickingMatchesOdesBoundedSolveStepByStep) {
   EXPECT_LE(apart, 20);
   EXPECT_GT(touching, 300);  // the wheels are on the rock for most of the run
   const SolverStats& s = guessed.solver_stats();
-  EXPECT_GT(s.obstacle_guessed, 8u * 300u);  // substeps solved sticking
+  // (sub)steps solved sticking
+  EXPECT_GT(s.obstacle_guessed, static_cast<std::uint64_t>(SimOptions{}.obstacle_substeps) * 300u);
   EXPECT_LT(s.obstacle_bounded, s.obstacle_guessed / 20);
   EXPECT_EQ(bounded.solver_stats().obstacle_guessed, 0u);
 }

@@ -33,6 +33,11 @@ def test_rock_contacts_are_guessed_and_counted_and_agree_with_the_bounded_path()
     assert bounded.solver_stats.obstacle_guessed == 0
     assert bounded.solver_stats.obstacle_bounded > 0
     assert "obstacle_guessed=" in repr(s)
+    # the wheels on the slab (~4 kg effective mass bound or more): every contact's §3.4 spring
+    # explicit (cpp/dynamics/obstacle_contacts.hpp), one contact per wheel and (sub)step
+    assert s.obstacle_explicit >= s.obstacle_guessed + s.obstacle_bounded > 0
+    assert s.obstacle_implicit == 0
+    assert "obstacle_explicit=" in repr(s)
     # the same trajectory to well within a millimetre (ODE's friction bound differs only where a
     # tyre's friction nears mu F_n)
     assert abs(guessed.state.position[0] - bounded.state.position[0]) < 1e-4
