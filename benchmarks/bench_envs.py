@@ -51,15 +51,31 @@ def vector_rate(env_id: str, num_envs: int, threads: int, steps: int, repeats: i
     return statistics.median(rates)
 
 
-def _rovers(n: int):
-    """n rovers driving 0.15 m/s on M90 through 20 box rocks each (a different field per rover),
-    rolling after 20 steps; with their start snapshots."""
+def _rovers(n: int, first: int = 0):
+    """Rovers first .. first + n - 1: each drives 0.15 m/s on M90 through its own field of 20
+    box rocks (seed 100 + index), rolling after 20 steps; with their start snapshots."""
     sims = []
-    for i in range(n):
+    for i in range(first, first + n):
         sim = rolling_rover(D.rock_field(20, seed=100 + i), 0.15)
         sim.step_n(20)
         sims.append(sim)
     return sims, [s.snapshot() for s in sims]
+
+
+def _timed_repeats(batch, sims, starts, chunk: int, steps: int, repeats: int, barrier=None):
+    """Seconds of each repeat of `steps` physics steps in calls of `chunk`, every repeat from the
+    same start; with a barrier, every repeat starts together with the other process's."""
+    times = []
+    for _ in range(repeats):
+        for s, snap in zip(sims, starts):
+            s.restore(snap)
+        if barrier is not None:
+            barrier.wait()
+        t0 = time.perf_counter()
+        for _ in range(steps // chunk):
+            batch.step(None, chunk)
+        times.append(time.perf_counter() - t0)
+    return times
 
 
 def batch_rate(n: int, threads: int, chunk: int, steps: int, repeats: int) -> float:
@@ -67,19 +83,35 @@ def batch_rate(n: int, threads: int, chunk: int, steps: int, repeats: int) -> fl
     physics steps per call (40 = one policy step); every repeat from the same start."""
     sims, starts = _rovers(n)
     batch = D.BatchStepper(sims, threads)
-    rates = []
-    for _ in range(repeats):
-        for s, snap in zip(sims, starts):
-            s.restore(snap)
-        t0 = time.perf_counter()
-        for _ in range(steps // chunk):
-            batch.step(None, chunk)
-        rates.append(n * steps / (time.perf_counter() - t0))
-    return statistics.median(rates)
+    return n * steps / statistics.median(_timed_repeats(batch, sims, starts, chunk, steps, repeats))
 
 
-def _process_share(args):
-    return batch_rate(*args)
+def _process_half(first, n, chunk, steps, repeats, barrier, out):
+    """One process of the process-per-core reference: rovers first .. first + n - 1 on one
+    thread, each repeat started together with the other process (barrier)."""
+    sims, starts = _rovers(n, first)
+    out.put((first, _timed_repeats(D.BatchStepper(sims, 1), sims, starts, chunk, steps, repeats,
+                                   barrier)))
+
+
+def process_rate(n: int, chunk: int, steps: int, repeats: int) -> float:
+    """The same n rovers as one process per core (rovers 0 .. n/2 - 1 in one, the rest in the
+    other, nothing shared), each repeat started by a barrier in both: rover-steps per second of a
+    repeat = n * steps / the slower process's time; median over repeats. Process start-up and
+    set-up are outside the timing."""
+    ctx = multiprocessing.get_context("spawn")
+    barrier, out = ctx.Barrier(2), ctx.Queue()
+    half = n // 2
+    procs = [ctx.Process(target=_process_half,
+                         args=(first, m, chunk, steps, repeats, barrier, out))
+             for first, m in ((0, half), (half, n - half))]
+    for p in procs:
+        p.start()
+    results = dict(out.get() for _ in procs)
+    for p in procs:
+        p.join()
+    walls = [max(a, b) for a, b in zip(results[0], results[half])]
+    return n * steps / statistics.median(walls)
 
 
 def batch_scaling(n: int = 8, steps: int = 400, repeats: int = 5):
@@ -93,13 +125,7 @@ def batch_scaling(n: int = 8, steps: int = 400, repeats: int = 5):
     for chunk in (4, 40):
         r1 = batch_rate(n, 1, chunk, steps, repeats)
         r2 = batch_rate(n, 2, chunk, steps, repeats)
-        with multiprocessing.get_context("spawn").Pool(2) as pool:
-            t0 = time.perf_counter()
-            pool.map(_process_share, [(n // 2, 1, chunk, steps, repeats)] * 2)
-            wall = time.perf_counter() - t0
-        # each process ran `repeats` repeats of n/2 rovers; its set-up (rock fields, 20 steps) is
-        # included, so the reference is a lower bound on what two processes achieve
-        rp = n * steps * repeats / wall
+        rp = process_rate(n, chunk, steps, repeats)
         print(f"| {chunk} | {r1:.0f} | {r2:.0f} | **{r2 / r1:.2f}x** | {rp:.0f} | {rp / r1:.2f}x |",
               flush=True)
 
