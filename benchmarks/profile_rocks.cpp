@@ -42,9 +42,10 @@ int main(int argc, char** argv) {
   profiled_steps(sim, std::atoi(argv[2]));
   const SolverStats& s = sim.solver_stats();
   std::printf("%zu rocks: x %.3f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
-              "bounded %llu; slip solves %llu\n",
+              "bounded %llu; slip solves %llu; guesses first %llu later %llu pivoted %llu\n",
               rocks.size(), sim.state().position.x(), (unsigned long long)s.sparse_solves,
               (unsigned long long)s.dense_solves, (unsigned long long)s.obstacle_guessed,
-              (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves);
+              (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves, (unsigned long long)s.first_guess,
+              (unsigned long long)s.later_guess, (unsigned long long)s.pivoted);
   return 0;
 }

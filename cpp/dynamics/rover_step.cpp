@@ -174,7 +174,8 @@ void RoverSim::Impl::prepare_ground() {
     soil::ContactState deeper = g.cs;
     const double dz = std::max(1e-5, 0.01 * dp.depth);
     deeper.sinkage += dz;
-    const double ks = std::max(0.0, (soil.split(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
+    const double ks =
+        std::max(0.0, (soil.split_pressure(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
     g.normal_damping = opt.soil_normal_damping + h * ks;
   }
 }
@@ -196,9 +197,22 @@ void RoverSim::Impl::prepare_ground() {
 // (benchmarks/RESULTS.md, "step independence").
 // Treated explicitly, (a) and (b) are stiff dampers (~1e4 N s/m) unstable at any useful step.
 // The slip itself is chosen by step() so that it matches eq 12 at the end of the step.
-RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) const {
+// soil.split(g.cs, slip), memoised for the step (GroundContact::memo_slip): the implicit-slip
+// check after a solve usually asks for the slip the solve used.
+const soil::SoilSplit& RoverSim::Impl::soil_split(int i, double slip) {
+  GroundContact& g = ground[i];
+  for (int k = 0; k < 2; ++k)
+    if (g.memo_slip[k] == slip) return g.memo_split[k];
+  const int k = g.memo_next;
+  g.memo_split[k] = soil.split(g.cs, slip);  // throws (memo unchanged) on a non-finite input
+  g.memo_slip[k] = slip;
+  g.memo_next = 1 - k;
+  return g.memo_split[k];
+}
+
+RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) {
   const GroundContact& g = ground[i];
-  const soil::SoilSplit s = soil.split(g.cs, slip);
+  const soil::SoilSplit& s = soil_split(i, slip);
   SoilTerms t;
   t.slip = s.slip;
   t.ax = std::max(s.fx_shear, 0.0);
@@ -233,7 +247,7 @@ void RoverSim::Impl::soil_terms(int i, double slip) {
 // How far the soil terms of the step (at the slip it used) are from those at the slip eq 12
 // gives at its end: the largest change of a row bound or explicit force [N], axle torques
 // counted as forces at the wheel radius.
-double RoverSim::Impl::soil_terms_gap(int i, double end_slip) const {
+double RoverSim::Impl::soil_terms_gap(int i, double end_slip) {
   const GroundContact& g = ground[i];
   const SoilTerms t = soil_terms_at(i, end_slip);
   return std::max({std::abs(t.ax - g.ax), std::abs(t.ay - g.ay), std::abs(t.comp - g.comp),

@@ -105,7 +105,7 @@ BekkerWongModel::BekkerWongModel(const SoilParameters& soil, const WheelGeometry
 }
 
 SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
-                                     const double* slip) const {
+                                     const double* slip, bool shear) const {
   const char* o = "ContactState";
   require_finite(o, "sinkage", st.sinkage);
   require_finite(o, "vx", st.vx);
@@ -189,6 +189,19 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
   for (int i = 0; i < m; ++i) pw[i] = std::max(cos_eff[i] - cos_tf, 1e-300);
   log_n(pw, pw, m);
   for (int i = 0; i < m; ++i) pw[i] *= n;
+  if (!shear) {  // eqs 30 and 32 without the shear: as the full pass below, term by term
+    double s_sig_sn = 0.0, s_sig_c = 0.0;
+    exp_n(pw, pw, m);
+    for (int i = 0; i < m; ++i) {
+      const double sigma = cos_eff[i] > cos_tf ? k_eq_ * pw[i] : 0.0;
+      const double w_sig = w[i] * sigma;
+      s_sig_sn += w_sig * sn[i];
+      s_sig_c += w_sig * c[i];
+    }
+    out.fx_pressure = -sdir * r * b * s_sig_sn;
+    out.fz_pressure = r * b * s_sig_c;
+    return out;
+  }
   // eqs 19 and 21 with |j_x| (unit shear level: eq 28 scales it by clamp(-v_cx / eps)), and
   // eqs 20 and 22 for y: the exponents of both in one batch.
   const double ky = r * one_minus_s * tan_beta;
@@ -240,6 +253,10 @@ SoilSplit BekkerWongModel::split(const ContactState& state) const {
 
 SoilSplit BekkerWongModel::split(const ContactState& state, double slip) const {
   return integrate(state, true, &slip);
+}
+
+SoilSplit BekkerWongModel::split_pressure(const ContactState& state, double slip) const {
+  return integrate(state, false, &slip, false);
 }
 
 WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {

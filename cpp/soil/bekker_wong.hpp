@@ -74,6 +74,10 @@ class BekkerWongModel {
   /// simulator solves eq 12 implicitly, at the velocities of the end of its step, so it chooses
   /// the slip and checks it against eq 12 afterwards (cpp/dynamics/rover_step.cpp).
   SoilSplit split(const ContactState& state, double slip) const;
+  /// split(state, slip) without the shear: only fx_pressure, fz_pressure and the angles are set
+  /// (bit-identical to split()'s), at about half the cost (no shear exponentials). The simulator
+  /// needs eq 32's pressure part at a second sinkage for its normal row (dF_z/dz).
+  SoilSplit split_pressure(const ContactState& state, double slip) const;
 
   /// Eq 12 with this model's eps_slip and slip_clamp_first (as evaluate() and split() use it).
   double slip_ratio(double vx, double vcx) const;
@@ -88,7 +92,9 @@ class BekkerWongModel {
   int points_per_panel() const { return static_cast<int>(nodes_.size()); }
 
  private:
-  SoilSplit integrate(const ContactState& state, bool lateral, const double* slip) const;
+  // shear = false: the pressure parts only (split_pressure).
+  SoilSplit integrate(const ContactState& state, bool lateral, const double* slip,
+                      bool shear = true) const;
 
   SoilParameters soil_;
   WheelGeometry wheel_;

@@ -173,6 +173,38 @@ TEST(BekkerWong, SplitPartsMatchTheReferenceAtZeroAndFullShear) {
   }
 }
 
+TEST(BekkerWong, SplitPressureIsSplitsPressurePartBitForBit) {
+  // split_pressure() skips the shear (the simulator's second sinkage for dF_z/dz needs only eq
+  // 32's pressure part); its fields must be split()'s exactly, so that using it changes no
+  // trajectory: driving, braking (the j_x sign-change panel), near rest, reversing, shallow
+  // and beyond-radius sinkage, every quadrature order the model allows at its ends.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> h(1e-5, 0.2), v(-0.3, 0.3), s(-1.2, 1.2);
+  for (const char* soil : kSoils) {
+    for (int points : {1, BekkerWongModel::kDefaultPointsPerPanel, BekkerWongModel::kMaxPointsPerPanel}) {
+      const BekkerWongModel m(SoilParameters::preset(soil), kWheel, points);
+      for (int i = 0; i < 200; ++i) {
+        ContactState st{h(rng), v(rng), v(rng), v(rng), v(rng)};
+        if (i % 10 == 0) st.vx = st.vcx = 1e-4 * v(rng);  // near rest (eq 16)
+        const double slip = s(rng);
+        const SoilSplit full = m.split(st, slip), p = m.split_pressure(st, slip);
+        EXPECT_EQ(p.fx_pressure, full.fx_pressure) << soil << " case " << i;
+        EXPECT_EQ(p.fz_pressure, full.fz_pressure) << soil << " case " << i;
+        EXPECT_EQ(p.slip, full.slip);
+        EXPECT_EQ(p.theta_f, full.theta_f);
+        EXPECT_EQ(p.theta_m, full.theta_m);
+        EXPECT_EQ(p.theta_r, full.theta_r);
+        EXPECT_EQ(p.sinkage, full.sinkage);
+        EXPECT_EQ(p.fx_shear, 0.0);
+        EXPECT_EQ(p.fy_shear, 0.0);
+      }
+    }
+  }
+  EXPECT_THROW(BekkerWongModel(SoilParameters::m90(), kWheel)
+                   .split_pressure(ContactState{0.01, NAN, 0.0, 0.0, 0.0}, 0.0),
+               std::invalid_argument);
+}
+
 TEST(BekkerWong, DefaultQuadratureMatchesConvergenceStudy) {
   // The default points_per_panel was chosen by the convergence study in benchmarks/RESULTS.md:
   // relative to the largest force component, 99% of random states are within 0.5% of the
