@@ -10,6 +10,8 @@ ODE's pivoting solver, as before issue 17), on the same rocks; and the cost of a
 from Python (step_n(0)), which every timed step includes.
 
     python benchmarks/bench_rocks.py [--steps 2400]
+    python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt   (bench_dynamics.py's
+        rock_field(n, seed=7, length=2, x0=0.8) as a file for benchmarks/profile_rocks.cpp)
 """
 
 import argparse
@@ -58,7 +60,15 @@ def main():
     ap.add_argument("--steps", type=int, default=2400, help="steps per run (30 s at 0.0125 s)")
     ap.add_argument("--substeps", type=int, nargs="+", default=[8, 1],
                     help="SimOptions.obstacle_substeps values to time (8: default)")
+    ap.add_argument("--dump-rocks", nargs=2, metavar=("N", "FILE"),
+                    help="write rock_field(N, seed=7, length=2, x0=0.8) for profile_rocks and exit")
     args = ap.parse_args()
+    if args.dump_rocks:
+        n, path = int(args.dump_rocks[0]), args.dump_rocks[1]
+        with open(path, "w") as f:  # profile_rocks.cpp reads: centre, size, yaw per line
+            for r in D.rock_field(n, seed=7, length=2.0, width=2.0, x0=0.8):
+                f.write(" ".join(repr(float(v)) for v in (*r.centre, *r.size, r.yaw)) + "\n")
+        return
     fields = {"low flat rocks (rolled over)": low_rocks(60),
               "rock_field(100, seed=7, length=2, x0=0.8) (stalls)":
                   D.rock_field(100, seed=7, length=2.0, width=2.0, x0=0.8)}
