@@ -292,6 +292,8 @@ bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   return true;
 }
 
+// Compiled for AVX2 too (as BekkerWongModel::integrate: the same operations in the same order).
+__attribute__((target_clones("avx2", "default")))
 void SparseLdlt::solve(double* x) const {
   const LdltPlan& plan = *plan_;
   const double* __restrict w = w_.data();
