@@ -166,16 +166,24 @@ void RoverSim::Impl::prepare_ground() {
     g.cs = soil::ContactState{dp.depth, vx != 0.0 ? vx : 1e-12, vc.dot(g.fy), st.contact_vx[i],
                               st.contact_vy[i]};
     // First guess of the step's slip: eq 12 at the start of the step (see step()).
-    soil_terms(i, soil.slip_ratio(g.cs.vx, g.cs.vcx));
+    const double slip0 = soil.slip_ratio(g.cs.vx, g.cs.vcx);
+    soil_terms(i, slip0);
     // The pressure-sinkage spring of eq 32 linearised in the sinkage, for the normal row
     // (rover_rows.cpp): F_z(z - h v_n) ~ F_z - h (dF_z/dz) v_n, a backward-Euler damper added to
     // the soil's. Taken at the start of the step instead, the spring against the damper (time
-    // constant ~50 ms) lagged a step: benchmarks/RESULTS.md, "step independence".
-    soil::ContactState deeper = g.cs;
-    const double dz = std::max(1e-5, 0.01 * dp.depth);
-    deeper.sinkage += dz;
-    const double ks =
-        std::max(0.0, (soil.split_pressure(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
+    // constant ~50 ms) lagged a step: benchmarks/RESULTS.md, "step independence". dF_z/dz comes
+    // with the split (eq 17 differentiated, SoilSplit::dfz_pressure_dh: closer to the exact
+    // derivative than a difference, at no extra quadrature); for n < 1 its integrand is singular
+    // at the ends, and a forward difference over 1 % of the sinkage serves instead.
+    double ks = 0.0;
+    if (soil.soil().sinkage_exponent >= 1.0) {
+      ks = std::max(0.0, soil_split(i, slip0).dfz_pressure_dh);
+    } else {
+      soil::ContactState deeper = g.cs;
+      const double dz = std::max(1e-5, 0.01 * dp.depth);
+      deeper.sinkage += dz;
+      ks = std::max(0.0, (soil.split_pressure(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
+    }
     g.normal_damping = opt.soil_normal_damping + h * ks;
   }
 }

@@ -50,6 +50,9 @@ struct SoilSplit {
   double torque_shear = 0.0;  ///< r^2 b \int tau_x at unit level (axle torque) [N m]
   double fy_shear = 0.0;      ///< r b \int tau_y at unit level, bulldozing included (eq 31) [N]
   double slip = 0.0, theta_f = 0.0, theta_m = 0.0, theta_r = 0.0, sinkage = 0.0;  ///< as WheelSoilForce
+  /// d fz_pressure / d sinkage at the same slip and velocities [N/m] (eq 17 differentiated under
+  /// the integral; 0 out of contact and beyond the radius). Not set by split_pressure().
+  double dfz_pressure_dh = 0.0;
 };
 
 /// Immutable, thread-safe evaluator: parameters are validated and derived constants and the

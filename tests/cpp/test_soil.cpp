@@ -6,6 +6,7 @@
 #include <functional>
 #include <vector>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -203,6 +204,57 @@ TEST(BekkerWong, SplitPressureIsSplitsPressurePartBitForBit) {
   EXPECT_THROW(BekkerWongModel(SoilParameters::m90(), kWheel)
                    .split_pressure(ContactState{0.01, NAN, 0.0, 0.0, 0.0}, 0.0),
                std::invalid_argument);
+}
+
+TEST(BekkerWong, SinkageDerivativeMatchesDifferencesOfTheForce) {
+  // dfz_pressure_dh (eq 17 differentiated under the integral of eq 32) against central
+  // differences of fz_pressure itself, at the finest quadrature (where quadrature error is
+  // negligible in both), for driving and braking slips, rolling and near rest; and at the default
+  // quadrature against that reference: closer than the forward difference (1 % of the sinkage)
+  // the simulator used before, on average, for n >= 1 (every preset). For n < 1 the derivative's
+  // integrand is singular at the ends and the difference is the better estimate (the simulator
+  // keeps it there: rover_step.cpp, prepare_ground).
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> h(2e-3, 0.1), v(0.02, 0.3), s(-0.9, 0.9);
+  for (const char* soil : {"dry_sand", "m90", "wet_sand", "n0.6"}) {
+    SoilParameters p = std::string(soil) == "n0.6" ? SoilParameters::m90() : SoilParameters::preset(soil);
+    if (std::string(soil) == "n0.6") p.sinkage_exponent = 0.6;
+    const BekkerWongModel fine(p, kWheel, BekkerWongModel::kMaxPointsPerPanel);
+    const BekkerWongModel coarse(p, kWheel);
+    double err_analytic = 0.0, err_forward = 0.0;
+    for (int i = 0; i < 40; ++i) {
+      ContactState st{h(rng), v(rng), 0.3 * v(rng), -v(rng), 0.0};
+      if (i % 8 == 0) st.vx = st.vcx = 1e-3;  // near rest (eq 16: theta_m, theta_r move)
+      const double slip = s(rng), dz = 1e-6 * st.sinkage;
+      ContactState up = st, down = st;
+      up.sinkage += dz;
+      down.sinkage -= dz;
+      const double central =
+          (fine.split(up, slip).fz_pressure - fine.split(down, slip).fz_pressure) / (2 * dz);
+      const double analytic = fine.split(st, slip).dfz_pressure_dh;
+      EXPECT_GT(analytic, 0.0) << soil << " case " << i;
+      if (p.sinkage_exponent >= 1.0)
+        EXPECT_NEAR(analytic, central, 2e-3 * std::abs(central)) << soil << " case " << i;
+      ContactState deeper = st;
+      deeper.sinkage += 0.01 * st.sinkage;
+      const double forward = (coarse.split_pressure(deeper, slip).fz_pressure -
+                              coarse.split(st, slip).fz_pressure) / (0.01 * st.sinkage);
+      err_analytic += std::abs(coarse.split(st, slip).dfz_pressure_dh - central) / central;
+      err_forward += std::abs(forward - central) / central;
+    }
+    std::printf("%s: mean relative error of dF_z/dh at the default quadrature: analytic %.2e, "
+                "forward difference %.2e\n", soil, err_analytic / 40, err_forward / 40);
+    if (p.sinkage_exponent >= 1.0) {
+      EXPECT_LT(err_analytic / 40, 0.02) << soil;
+      EXPECT_LT(err_analytic, err_forward) << soil;
+    } else {  // (cos theta' - cos theta_f)^(n - 1) is singular at the ends: the simulator
+      EXPECT_GT(err_analytic, err_forward) << soil;  // differences the force instead
+    }
+  }
+  ContactState beyond{0.5, 0.1, 0.0, -0.05, 0.0};  // past the radius: clamped, no change
+  EXPECT_EQ(BekkerWongModel(SoilParameters::m90(), kWheel).split(beyond, 0.2).dfz_pressure_dh, 0.0);
+  EXPECT_EQ(BekkerWongModel(SoilParameters::m90(), kWheel)
+                .split(ContactState{-0.01, 0.1, 0.0, -0.05, 0.0}, 0.2).dfz_pressure_dh, 0.0);
 }
 
 TEST(BekkerWong, DefaultQuadratureMatchesConvergenceStudy) {
