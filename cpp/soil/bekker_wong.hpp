@@ -78,8 +78,9 @@ class BekkerWongModel {
   /// the slip and checks it against eq 12 afterwards (cpp/dynamics/rover_step.cpp).
   SoilSplit split(const ContactState& state, double slip) const;
   /// split(state, slip) without the shear: only fx_pressure, fz_pressure and the angles are set
-  /// (bit-identical to split()'s), at about half the cost (no shear exponentials). The simulator
-  /// needs eq 32's pressure part at a second sinkage for its normal row (dF_z/dz).
+  /// (bit-identical to split()'s), at about 70 % of the cost (no shear exponentials). The
+  /// simulator differences eq 32's pressure part over the sinkage with it for n < 1, where
+  /// SoilSplit::dfz_pressure_dh is not accurate (its integrand is singular at the ends).
   SoilSplit split_pressure(const ContactState& state, double slip) const;
 
   /// Eq 12 with this model's eps_slip and slip_clamp_first (as evaluate() and split() use it).
