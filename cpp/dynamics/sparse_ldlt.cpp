@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "ernest/common/vector_math.hpp"
+
 namespace ernest::dynamics {
 
 namespace {
@@ -292,8 +294,8 @@ bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   return true;
 }
 
-// Compiled for AVX2 too (as BekkerWongModel::integrate: the same operations in the same order).
-__attribute__((target_clones("avx2", "default")))
+// Also compiled for AVX2 (common/vector_math.hpp; the same bits).
+ERNEST_ALSO_AVX2
 void SparseLdlt::solve(double* x) const {
   const LdltPlan& plan = *plan_;
   const double* __restrict w = w_.data();

@@ -104,10 +104,9 @@ BekkerWongModel::BekkerWongModel(const SoilParameters& soil, const WheelGeometry
   d2_ = phi > 0.0 ? cot_xc + cot_xc * cot_xc * tan_phi_ : cot_xc;  // eq 26: cot^2 Xc / cot phi
 }
 
-// Compiled twice, for AVX2 and for baseline x86-64, chosen at load time: the node loops below run
-// 4 wide on AVX2. The same operations in the same order (no FMA: target "avx2" does not enable
-// it; no reassociation), so both give the same bits.
-__attribute__((target_clones("avx2", "default")))
+// Also compiled for AVX2 (common/vector_math.hpp): the node loops below run 4 wide there, with
+// the same bits.
+ERNEST_ALSO_AVX2
 SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
                                      const double* slip, bool shear) const {
   const char* o = "ContactState";
