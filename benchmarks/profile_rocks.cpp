@@ -45,7 +45,8 @@ int main(int argc, char** argv) {
               "bounded %llu; slip solves %llu; guesses first %llu later %llu pivoted %llu\n",
               rocks.size(), sim.state().position.x(), (unsigned long long)s.sparse_solves,
               (unsigned long long)s.dense_solves, (unsigned long long)s.obstacle_guessed,
-              (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves, (unsigned long long)s.first_guess,
-              (unsigned long long)s.later_guess, (unsigned long long)s.pivoted);
+              (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves,
+              (unsigned long long)s.first_guess, (unsigned long long)s.later_guess,
+              (unsigned long long)s.pivoted);
   return 0;
 }
