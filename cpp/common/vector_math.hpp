@@ -6,6 +6,16 @@
 // x86-64) the same calls fall back to std::exp / std::log.
 #pragma once
 
+// A function compiled twice, for AVX2 and for the baseline ISA, the copy chosen when the program
+// loads (GCC's target_clones, an ifunc): for loops the compiler vectorises 4 wide on AVX2. AVX2
+// without FMA and without reassociation does the same operations in the same order, so both
+// copies give the same bits. Elsewhere than x86-64 with GCC/Clang: one plain copy.
+#if defined(__x86_64__) && defined(__GNUC__) && defined(__linux__)
+#define ERNEST_ALSO_AVX2 __attribute__((target_clones("avx2", "default")))
+#else
+#define ERNEST_ALSO_AVX2
+#endif
+
 namespace ernest {
 
 /// y[i] = exp(x[i]) for 0 <= i < n. x and y may be the same array.

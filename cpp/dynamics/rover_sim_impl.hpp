@@ -93,6 +93,12 @@ struct GroundContact {
   // end of the step, linearised in the sinkage)
   double normal_damping = 0.0;
   soil::ContactState cs{};  // eq 12–32 inputs at the start of the step (Fig. 7 frame)
+  // soil.split(cs, slip) at the last two slips asked for this step (soil_split): the step's
+  // first attempt and the implicit-slip check after it ask for the same slip, and the same
+  // state and slip give the same split. Cleared with the contact every step.
+  std::array<double, 2> memo_slip{std::nan(""), std::nan("")};
+  std::array<soil::SoilSplit, 2> memo_split{};
+  int memo_next = 0;
 };
 
 // One bounded velocity row of a motor: drive the relative rate to `target` with |torque| <= bound
@@ -285,9 +291,10 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
     double slip = 0.0, ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0, axle_torque = 0.0;
     double fz_pressure = 0.0;  // eq 32 without the shear part, not floored
   };
-  SoilTerms soil_terms_at(int wheel, double slip) const;
+  const soil::SoilSplit& soil_split(int wheel, double slip);
+  SoilTerms soil_terms_at(int wheel, double slip);
   void soil_terms(int wheel, double slip);
-  double soil_terms_gap(int wheel, double end_slip) const;
+  double soil_terms_gap(int wheel, double end_slip);
   void end_velocity(int wheel, double& vx, double& vcx) const;
   void soil_levels(int wheel);
   bool solve_rows(detail::RowStates& guess, detail::RowStates& next, detail::RowStates& tried,

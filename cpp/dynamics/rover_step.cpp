@@ -166,15 +166,24 @@ void RoverSim::Impl::prepare_ground() {
     g.cs = soil::ContactState{dp.depth, vx != 0.0 ? vx : 1e-12, vc.dot(g.fy), st.contact_vx[i],
                               st.contact_vy[i]};
     // First guess of the step's slip: eq 12 at the start of the step (see step()).
-    soil_terms(i, soil.slip_ratio(g.cs.vx, g.cs.vcx));
+    const double slip0 = soil.slip_ratio(g.cs.vx, g.cs.vcx);
+    soil_terms(i, slip0);
     // The pressure-sinkage spring of eq 32 linearised in the sinkage, for the normal row
     // (rover_rows.cpp): F_z(z - h v_n) ~ F_z - h (dF_z/dz) v_n, a backward-Euler damper added to
     // the soil's. Taken at the start of the step instead, the spring against the damper (time
-    // constant ~50 ms) lagged a step: benchmarks/RESULTS.md, "step independence".
-    soil::ContactState deeper = g.cs;
-    const double dz = std::max(1e-5, 0.01 * dp.depth);
-    deeper.sinkage += dz;
-    const double ks = std::max(0.0, (soil.split(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
+    // constant ~50 ms) lagged a step: benchmarks/RESULTS.md, "step independence". dF_z/dz comes
+    // with the split (eq 17 differentiated, SoilSplit::dfz_pressure_dh: closer to the exact
+    // derivative than a difference, at no extra quadrature); for n < 1 its integrand is singular
+    // at the ends, and a forward difference over 1 % of the sinkage serves instead.
+    double ks = 0.0;
+    if (soil.soil().sinkage_exponent >= 1.0) {
+      ks = std::max(0.0, soil_split(i, slip0).dfz_pressure_dh);
+    } else {
+      soil::ContactState deeper = g.cs;
+      const double dz = std::max(1e-5, 0.01 * dp.depth);
+      deeper.sinkage += dz;
+      ks = std::max(0.0, (soil.split_pressure(deeper, st.slip[i]).fz_pressure - g.fz_pressure) / dz);
+    }
     g.normal_damping = opt.soil_normal_damping + h * ks;
   }
 }
@@ -196,9 +205,22 @@ void RoverSim::Impl::prepare_ground() {
 // (benchmarks/RESULTS.md, "step independence").
 // Treated explicitly, (a) and (b) are stiff dampers (~1e4 N s/m) unstable at any useful step.
 // The slip itself is chosen by step() so that it matches eq 12 at the end of the step.
-RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) const {
+// soil.split(g.cs, slip), memoised for the step (GroundContact::memo_slip): the implicit-slip
+// check after a solve usually asks for the slip the solve used.
+const soil::SoilSplit& RoverSim::Impl::soil_split(int i, double slip) {
+  GroundContact& g = ground[i];
+  for (int k = 0; k < 2; ++k)
+    if (g.memo_slip[k] == slip) return g.memo_split[k];
+  const int k = g.memo_next;
+  g.memo_split[k] = soil.split(g.cs, slip);  // throws (memo unchanged) on a non-finite input
+  g.memo_slip[k] = slip;
+  g.memo_next = 1 - k;
+  return g.memo_split[k];
+}
+
+RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) {
   const GroundContact& g = ground[i];
-  const soil::SoilSplit s = soil.split(g.cs, slip);
+  const soil::SoilSplit& s = soil_split(i, slip);
   SoilTerms t;
   t.slip = s.slip;
   t.ax = std::max(s.fx_shear, 0.0);
@@ -233,7 +255,7 @@ void RoverSim::Impl::soil_terms(int i, double slip) {
 // How far the soil terms of the step (at the slip it used) are from those at the slip eq 12
 // gives at its end: the largest change of a row bound or explicit force [N], axle torques
 // counted as forces at the wheel radius.
-double RoverSim::Impl::soil_terms_gap(int i, double end_slip) const {
+double RoverSim::Impl::soil_terms_gap(int i, double end_slip) {
   const GroundContact& g = ground[i];
   const SoilTerms t = soil_terms_at(i, end_slip);
   return std::max({std::abs(t.ax - g.ax), std::abs(t.ay - g.ay), std::abs(t.comp - g.comp),

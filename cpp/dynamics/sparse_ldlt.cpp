@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "ernest/common/vector_math.hpp"
+
 namespace ernest::dynamics {
 
 namespace {
@@ -266,9 +268,13 @@ bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   plan_ = &plan;
   double* w = w_.data();
   const int s = plan.w_stride_, n = plan.n_, df = plan.dense_from_;
-  for (int g = 0; g < plan.n_copies_; ++g) {
+  for (int g = 0; g < plan.n_copies_; ++g) {  // two at a time (the runs are short: no memcpy)
     const LdltPlan::Copy& c = plan.copies_[g];
-    for (int e = 0; e < c.count; ++e) w[c.dst + e] = a[c.src + e];
+    const double* src = a + c.src;
+    double* dst = w + c.dst;
+    int e = 0;
+    for (; e + 2 <= c.count; e += 2) _mm_storeu_pd(dst + e, _mm_loadu_pd(src + e));
+    if (e < c.count) dst[e] = src[e];
   }
   // Right-looking from supernode to supernode (lone columns one by one), then the dense tail.
   for (int sn = 0; sn < plan.n_supers_; ++sn) {
@@ -288,6 +294,8 @@ bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   return true;
 }
 
+// Also compiled for AVX2 (common/vector_math.hpp; the same bits).
+ERNEST_ALSO_AVX2
 void SparseLdlt::solve(double* x) const {
   const LdltPlan& plan = *plan_;
   const double* __restrict w = w_.data();

@@ -104,8 +104,11 @@ BekkerWongModel::BekkerWongModel(const SoilParameters& soil, const WheelGeometry
   d2_ = phi > 0.0 ? cot_xc + cot_xc * cot_xc * tan_phi_ : cot_xc;  // eq 26: cot^2 Xc / cot phi
 }
 
+// Also compiled for AVX2 (common/vector_math.hpp): the node loops below run 4 wide there, with
+// the same bits.
+ERNEST_ALSO_AVX2
 SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
-                                     const double* slip) const {
+                                     const double* slip, bool shear) const {
   const char* o = "ContactState";
   require_finite(o, "sinkage", st.sinkage);
   require_finite(o, "vx", st.vx);
@@ -159,7 +162,7 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
   // Plain loops over the nodes (the compiler vectorises them), the transcendentals of all nodes
   // in batched calls (common/vector_math.hpp).
   alignas(32) double theta[kCapacity], w[kCapacity], c[kCapacity], sn[kCapacity];
-  alignas(32) double cos_eff[kCapacity], pw[kCapacity], ex[2 * kCapacity];
+  alignas(32) double cos_eff[kCapacity], pw[kCapacity], ex[2 * kCapacity], dfac[kCapacity];
   int m = 0, m_rear = 0;  // nodes; those behind theta_m (the panels below that cut)
   for (int panel = 0; panel + 1 < ncuts; ++panel) {
     const double lo = cuts[panel], hi = cuts[panel + 1];
@@ -180,15 +183,37 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
   }
   // eq 18: theta' maps [theta_r, theta_m] onto [theta_f, theta_m]; theta' = theta in front.
   const double map_slope = (tf - tm) / (tm - tr);
+  // dfac: d(cos theta' - cos theta_f) / d theta_f at fixed theta (the sinkage derivative below):
+  // sin theta_f - sin theta' d theta' / d theta_f, with d theta' / d theta_f = 1 + (theta_r /
+  // theta_f) map_slope behind theta_m (eqs 14-15 scale theta_m and theta_r with theta_f, so
+  // map_slope does not depend on it) and 0 in front.
+  const double dmap = 1.0 + tr / tf * map_slope;
   for (int i = 0; i < m_rear; ++i) {
-    const double tmap = tf - (theta[i] - tr) * map_slope;
-    cos_eff[i] = poly_cos_t2(tmap * tmap);
+    const double tmap = tf - (theta[i] - tr) * map_slope, tmap2 = tmap * tmap;
+    cos_eff[i] = poly_cos_t2(tmap2);
+    dfac[i] = sin_tf - dmap * poly_sin_t2(tmap, tmap2);
   }
-  for (int i = m_rear; i < m; ++i) cos_eff[i] = c[i];
+  for (int i = m_rear; i < m; ++i) {
+    cos_eff[i] = c[i];
+    dfac[i] = sin_tf;
+  }
   // eq 17, with (cos theta' - cos theta_f)^n written as exp(n log(.)).
   for (int i = 0; i < m; ++i) pw[i] = std::max(cos_eff[i] - cos_tf, 1e-300);
   log_n(pw, pw, m);
   for (int i = 0; i < m; ++i) pw[i] *= n;
+  if (!shear) {  // eqs 30 and 32 without the shear: as the full pass below, term by term
+    double s_sig_sn = 0.0, s_sig_c = 0.0;
+    exp_n(pw, pw, m);
+    for (int i = 0; i < m; ++i) {
+      const double sigma = cos_eff[i] > cos_tf ? k_eq_ * pw[i] : 0.0;
+      const double w_sig = w[i] * sigma;
+      s_sig_sn += w_sig * sn[i];
+      s_sig_c += w_sig * c[i];
+    }
+    out.fx_pressure = -sdir * r * b * s_sig_sn;
+    out.fz_pressure = r * b * s_sig_c;
+    return out;
+  }
   // eqs 19 and 21 with |j_x| (unit shear level: eq 28 scales it by clamp(-v_cx / eps)), and
   // eqs 20 and 22 for y: the exponents of both in one batch.
   const double ky = r * one_minus_s * tan_beta;
@@ -201,6 +226,7 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
   exp_n(pw, pw, m);
   exp_n(ex, ex, lateral ? 2 * m : m);
   double s_sig_sn = 0.0, s_sig_c = 0.0, s_tau_c = 0.0, s_tau_sn = 0.0, s_tau = 0.0, s_tau_y = 0.0;
+  double s_dsig_c = 0.0;  // int d sigma / d theta_f cos theta (eq 17 differentiated)
   const double h_rear = h / std::max(-tr, 1e-300), h_front = h / tf, inv_rb = 1.0 / (r * b);
   for (int i = 0; i < m; ++i) {
     const double sigma = cos_eff[i] > cos_tf ? k_eq_ * pw[i] : 0.0;
@@ -211,6 +237,9 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
     s_tau_c += w_tau * c[i];
     s_tau_sn += w_tau * sn[i];
     s_tau += w_tau;
+    // d sigma / d theta_f = n sigma / (cos theta' - cos theta_f) * dfac (no new transcendental)
+    const double gap = cos_eff[i] - cos_tf;
+    if (gap > 0.0) s_dsig_c += w[i] * (n * sigma / gap * dfac[i]) * c[i];
     if (lateral) {
       // Hegedus bulldozing eqs 23–27 with h(theta) linear from h at the reference point
       // (theta = 0) to 0 at theta_r and theta_f.
@@ -227,6 +256,10 @@ SoilSplit BekkerWongModel::integrate(const ContactState& st, bool lateral,
   out.fz_shear = sdir * r * b * s_tau_sn;      // eq 32, shear
   out.torque_shear = r * r * b * s_tau;
   if (lateral) out.fy_shear = r * b * s_tau_y;  // eq 31
+  // d F_z / d h: sigma vanishes at both ends (theta' = theta_f at theta_r and theta_f), so the
+  // moving limits add nothing (Leibniz); d theta_f / d h = 1 / (r sin theta_f) from eq 13.
+  // Beyond the radius the sinkage is clamped: no change.
+  if (st.sinkage < r) out.dfz_pressure_dh = b * s_dsig_c / sin_tf;
   return out;
 }
 
@@ -240,6 +273,10 @@ SoilSplit BekkerWongModel::split(const ContactState& state) const {
 
 SoilSplit BekkerWongModel::split(const ContactState& state, double slip) const {
   return integrate(state, true, &slip);
+}
+
+SoilSplit BekkerWongModel::split_pressure(const ContactState& state, double slip) const {
+  return integrate(state, false, &slip, false);
 }
 
 WheelSoilForce BekkerWongModel::evaluate(const ContactState& st) const {

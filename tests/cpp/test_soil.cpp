@@ -6,6 +6,7 @@
 #include <functional>
 #include <vector>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -171,6 +172,91 @@ TEST(BekkerWong, SplitPartsMatchTheReferenceAtZeroAndFullShear) {
       EXPECT_DOUBLE_EQ(t.slip, m.evaluate(st).slip);
     }
   }
+}
+
+TEST(BekkerWong, SplitPressureIsSplitsPressurePartBitForBit) {
+  // split_pressure() skips the shear (the simulator's second sinkage for dF_z/dz needs only eq
+  // 32's pressure part); its fields must be split()'s exactly, so that using it changes no
+  // trajectory: driving, braking (the j_x sign-change panel), near rest, reversing, shallow
+  // and beyond-radius sinkage, every quadrature order the model allows at its ends.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> h(1e-5, 0.2), v(-0.3, 0.3), s(-1.2, 1.2);
+  for (const char* soil : kSoils) {
+    for (int points :
+         {1, BekkerWongModel::kDefaultPointsPerPanel, BekkerWongModel::kMaxPointsPerPanel}) {
+      const BekkerWongModel m(SoilParameters::preset(soil), kWheel, points);
+      for (int i = 0; i < 200; ++i) {
+        ContactState st{h(rng), v(rng), v(rng), v(rng), v(rng)};
+        if (i % 10 == 0) st.vx = st.vcx = 1e-4 * v(rng);  // near rest (eq 16)
+        const double slip = s(rng);
+        const SoilSplit full = m.split(st, slip), p = m.split_pressure(st, slip);
+        EXPECT_EQ(p.fx_pressure, full.fx_pressure) << soil << " case " << i;
+        EXPECT_EQ(p.fz_pressure, full.fz_pressure) << soil << " case " << i;
+        EXPECT_EQ(p.slip, full.slip);
+        EXPECT_EQ(p.theta_f, full.theta_f);
+        EXPECT_EQ(p.theta_m, full.theta_m);
+        EXPECT_EQ(p.theta_r, full.theta_r);
+        EXPECT_EQ(p.sinkage, full.sinkage);
+        EXPECT_EQ(p.fx_shear, 0.0);
+        EXPECT_EQ(p.fy_shear, 0.0);
+      }
+    }
+  }
+  EXPECT_THROW(BekkerWongModel(SoilParameters::m90(), kWheel)
+                   .split_pressure(ContactState{0.01, NAN, 0.0, 0.0, 0.0}, 0.0),
+               std::invalid_argument);
+}
+
+TEST(BekkerWong, SinkageDerivativeMatchesDifferencesOfTheForce) {
+  // dfz_pressure_dh (eq 17 differentiated under the integral of eq 32) against central
+  // differences of fz_pressure itself, at the finest quadrature (where quadrature error is
+  // negligible in both), for driving and braking slips, rolling and near rest; and at the default
+  // quadrature against that reference: closer than the forward difference (1 % of the sinkage)
+  // the simulator used before, on average, for n >= 1 (every preset). For n < 1 the derivative's
+  // integrand is singular at the ends and the difference is the better estimate (the simulator
+  // keeps it there: rover_step.cpp, prepare_ground).
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> h(2e-3, 0.1), v(0.02, 0.3), s(-0.9, 0.9);
+  for (const char* soil : {"dry_sand", "m90", "wet_sand", "n0.6"}) {
+    const bool low_n = std::string(soil) == "n0.6";  // n < 1: no preset has one
+    SoilParameters p = low_n ? SoilParameters::m90() : SoilParameters::preset(soil);
+    if (low_n) p.sinkage_exponent = 0.6;
+    const BekkerWongModel fine(p, kWheel, BekkerWongModel::kMaxPointsPerPanel);
+    const BekkerWongModel coarse(p, kWheel);
+    double err_analytic = 0.0, err_forward = 0.0;
+    for (int i = 0; i < 40; ++i) {
+      ContactState st{h(rng), v(rng), 0.3 * v(rng), -v(rng), 0.0};
+      if (i % 8 == 0) st.vx = st.vcx = 1e-3;  // near rest (eq 16: theta_m, theta_r move)
+      const double slip = s(rng), dz = 1e-6 * st.sinkage;
+      ContactState up = st, down = st;
+      up.sinkage += dz;
+      down.sinkage -= dz;
+      const double central =
+          (fine.split(up, slip).fz_pressure - fine.split(down, slip).fz_pressure) / (2 * dz);
+      const double analytic = fine.split(st, slip).dfz_pressure_dh;
+      EXPECT_GT(analytic, 0.0) << soil << " case " << i;
+      if (p.sinkage_exponent >= 1.0)
+        EXPECT_NEAR(analytic, central, 2e-3 * std::abs(central)) << soil << " case " << i;
+      ContactState deeper = st;
+      deeper.sinkage += 0.01 * st.sinkage;
+      const double forward = (coarse.split_pressure(deeper, slip).fz_pressure -
+                              coarse.split(st, slip).fz_pressure) / (0.01 * st.sinkage);
+      err_analytic += std::abs(coarse.split(st, slip).dfz_pressure_dh - central) / central;
+      err_forward += std::abs(forward - central) / central;
+    }
+    std::printf("%s: mean relative error of dF_z/dh at the default quadrature: analytic %.2e, "
+                "forward difference %.2e\n", soil, err_analytic / 40, err_forward / 40);
+    if (p.sinkage_exponent >= 1.0) {
+      EXPECT_LT(err_analytic / 40, 0.02) << soil;
+      EXPECT_LT(err_analytic, err_forward) << soil;
+    } else {  // (cos theta' - cos theta_f)^(n - 1) is singular at the ends: the simulator
+      EXPECT_GT(err_analytic, err_forward) << soil;  // differences the force instead
+    }
+  }
+  ContactState beyond{0.5, 0.1, 0.0, -0.05, 0.0};  // past the radius: clamped, no change
+  EXPECT_EQ(BekkerWongModel(SoilParameters::m90(), kWheel).split(beyond, 0.2).dfz_pressure_dh, 0.0);
+  EXPECT_EQ(BekkerWongModel(SoilParameters::m90(), kWheel)
+                .split(ContactState{-0.01, 0.1, 0.0, -0.05, 0.0}, 0.2).dfz_pressure_dh, 0.0);
 }
 
 TEST(BekkerWong, DefaultQuadratureMatchesConvergenceStudy) {
