@@ -1,5 +1,8 @@
 #include "ernest/envs/vec_env.hpp"
 
+#include <algorithm>
+#include <chrono>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -14,6 +17,19 @@ VecRoverEnv::VecRoverEnv(const dynamics::RoverParameters& params, const EnvOptio
   require_in_range("VecRoverEnv", "num_envs", num_envs, 1, 4096);
   envs_.reserve(num_envs);
   for (int i = 0; i < num_envs; ++i) envs_.push_back(std::make_unique<RoverEnv>(params, options));
+  order_.resize(static_cast<size_t>(num_envs));
+  std::iota(order_.begin(), order_.end(), 0);
+  cost_ns_.assign(static_cast<size_t>(num_envs), 0);
+}
+
+void VecRoverEnv::reorder() {
+  const auto key = [&](int i) {
+    return std::make_pair(envs_[static_cast<size_t>(i)]->done() ? 1 : 0, cost_ns_[static_cast<size_t>(i)]);
+  };
+  std::sort(order_.begin(), order_.end(), [&](int a, int b) {
+    const auto ka = key(a), kb = key(b);
+    return ka != kb ? ka > kb : a < b;
+  });
 }
 
 RoverEnv& VecRoverEnv::env(int i) {
@@ -48,11 +64,19 @@ void VecRoverEnv::step(const Eigen::Ref<const ActionBatch>& actions,
   results.assign(size(), StepResult{});
   was_reset.assign(size(), 0);
   try {
-    pool_.parallel_for(size(), [&](int i) { step_one(i, actions, observations, results, was_reset); });
+    pool_.parallel_for(size(), [&](int k) {
+      const int i = order_[static_cast<size_t>(k)];
+      const auto t0 = std::chrono::steady_clock::now();
+      step_one(i, actions, observations, results, was_reset);
+      cost_ns_[static_cast<size_t>(i)] =
+          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0)
+              .count();
+    });
   } catch (const Interrupted&) {
     interrupted_ = true;
     throw;
   }
+  reorder();
 }
 
 void VecRoverEnv::step_one(int i, const Eigen::Ref<const ActionBatch>& actions,

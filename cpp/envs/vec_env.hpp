@@ -39,6 +39,13 @@ class VecRoverEnv {
   std::vector<std::unique_ptr<RoverEnv>> envs_;
   ThreadPool pool_;
   bool interrupted_ = false;  // a step or reset stopped part way: reset() first
+  // The order the pool hands environments out in, costliest first (longest-processing-time
+  // scheduling: the batch ends when its slowest thread does): environments that reset in the
+  // next call first (a reset builds a new world, ~5 policy steps' work), then by the wall time of
+  // their last step. Only the schedule depends on it, never a result (each env owns its world).
+  std::vector<int> order_;
+  std::vector<std::int64_t> cost_ns_;
+  void reorder();
   void step_one(int i, const Eigen::Ref<const ActionBatch>& actions,
                 Eigen::Ref<ObservationBatch> observations, std::vector<StepResult>& results,
                 std::vector<char>& was_reset);
