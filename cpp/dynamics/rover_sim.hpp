@@ -190,6 +190,9 @@ struct SolverStats {
   /// Extra solves of a step made to find the slip ratios that agree with eq 12 at the step's end
   /// (the implicit slip of cpp/dynamics/rover_step.cpp); 0 when the first slip already agreed.
   std::uint64_t slip_solves = 0;
+  /// Steps (substeps) on soil with a wheel whose slip drove its motion (d s_end / d sigma >= 1:
+  /// the slip taken from the step's start, not solved implicitly; cpp/dynamics/rover_step.cpp).
+  std::uint64_t slip_driving = 0;
   /// Steps (substeps) with obstacle contacts whose every wheel was solved sticking (friction rows
   /// unbounded: a linear system for the sparse solver), and those with a wheel solved bounded
   /// (ODE's friction bounded by mu times the normal force: its pivoting solver).

@@ -361,7 +361,7 @@ void RoverSim::Impl::step_once() {
   Eigen::Vector4d best_sigma = sigma, prev_sigma = sigma, prev_res = res;
   Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
   const Eigen::Vector4d start_sigma = sigma;
-  Eigen::Vector4d first_end = sigma;  // eq 12 at the end of the first solve
+  Eigen::Vector4d last_sigma = sigma, last_end = sigma;  // each wheel's last solve: sigma, s_end
   std::array<bool, 4> driving{};      // explicit slip: the slip drives this wheel's motion
   double best = std::numeric_limits<double>::infinity();
   bool held = false;
@@ -388,9 +388,10 @@ void RoverSim::Impl::step_once() {
       end_velocity(i, vx, vcx);
       const double s_end = soil.slip_ratio(vx, vcx);
       res[i] = s_end - sigma[i];
-      if (solve == 0) first_end[i] = s_end;
-      const double ds = sigma[i] - start_sigma[i];
-      if (solve == 1 && std::abs(ds) > kSlipTolerance && (s_end - first_end[i]) / ds >= 1.0) {
+      const double ds = sigma[i] - last_sigma[i], de = s_end - last_end[i];
+      last_sigma[i] = sigma[i];
+      last_end[i] = s_end;
+      if (solve > 0 && std::abs(ds) > kSlipTolerance && de / ds >= 1.0) {
         driving[i] = split = true;  // h lambda >= 1: see above
         res[i] = 0.0;
         sigma[i] = start_sigma[i];
@@ -428,6 +429,7 @@ void RoverSim::Impl::step_once() {
       sigma[i] = ground[i].active && !driving[i] ? std::clamp(sigma[i] + step[i], -1.0, 1.0)
                                                 : sigma[i];
   }
+  if (driving[0] || driving[1] || driving[2] || driving[3]) ++stats.slip_driving;
   if (opt.ground == GroundType::Rigid) commit_rigid();
   guesser.commit(next);
   if (n_obstacle_contacts > 0) {
