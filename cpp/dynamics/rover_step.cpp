@@ -352,9 +352,11 @@ void RoverSim::Impl::step_once() {
   // of up to ~400 1/s. Backward Euler's amplification 1 / (1 - h lambda) is below 1 in magnitude
   // for h lambda > 2 (negative for h lambda > 1), so at the default step it held the wheel at
   // that stall, where fine steps climb the face and fall back (benchmarks/RESULTS.md, "Implicit
-  // slip only where it damps"). The secant d s_end / d sigma of a wheel's first two solves
-  // estimates h lambda; a wheel where it is >= 1 takes its slip from the start of the step
-  // (forward Euler: amplification 1 + h lambda, a growing motion grows) and leaves the solve.
+  // slip only where it damps"). The secant d s_end / d sigma of a wheel's last two solves
+  // estimates h lambda; a wheel where it reaches 1 (the step's equation in sigma has then
+  // more than one root, and backward Euler reverses or damps the growth) takes its slip from
+  // the start of the step (forward Euler: amplification 1 + h lambda, a growing motion grows)
+  // and leaves the solve.
   const bool soft = opt.ground == GroundType::Soil;
   Eigen::Vector4d sigma, res = Eigen::Vector4d::Zero();
   for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
