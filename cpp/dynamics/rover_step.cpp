@@ -349,12 +349,12 @@ void RoverSim::Impl::step_once() {
   // slip gives a smaller end slip), not where it drives it. A wheel spinning against an obstacle
   // face on soil stands at v_x ~ 0, where eq 12's factor (1 - exp(-eps v_x^2)) makes the slip, and
   // with it the traction, grow with the forward speed: a negative damper, an unstable rate lambda
-  // of up to ~400 1/s. Backward Euler's amplification 1 / (1 - h lambda) is below 1 in magnitude
+  // of a few hundred 1/s. Backward Euler's amplification 1 / (1 - h lambda) is below 1 in magnitude
   // for h lambda > 2 (negative for h lambda > 1), so at the default step it held the wheel at
   // that stall, where fine steps climb the face and fall back (benchmarks/RESULTS.md, "Implicit
   // slip only where it damps"). The secant d s_end / d sigma of a wheel's last two solves
-  // estimates h lambda; a wheel where it reaches 1 (the step's equation in sigma has then
-  // more than one root, and backward Euler reverses or damps the growth) takes its slip from
+  // estimates h lambda; a wheel where it reaches 1 (the step's equation in sigma can then have
+  // several roots, and backward Euler reverses or damps the growth) takes its slip from
   // the start of the step (forward Euler: amplification 1 + h lambda, a growing motion grows)
   // and leaves the solve.
   const bool soft = opt.ground == GroundType::Soil;
@@ -364,7 +364,7 @@ void RoverSim::Impl::step_once() {
   Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
   const Eigen::Vector4d start_sigma = sigma;
   Eigen::Vector4d last_sigma = sigma, last_end = sigma;  // each wheel's last solve: sigma, s_end
-  std::array<bool, 4> driving{};      // explicit slip: the slip drives this wheel's motion
+  std::array<bool, 4> driving{};  // explicit slip: the slip drives this wheel's motion
   double best = std::numeric_limits<double>::infinity();
   bool held = false;
   int attempts = 0;
