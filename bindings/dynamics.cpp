@@ -281,6 +281,8 @@ void bind_dynamics(py::module_& m) {
                     "constraint solves handed to ODE's Dantzig solver")
       .def_readonly("slip_solves", &SolverStats::slip_solves,
                     "extra solves of a step that made its slip agree with eq 12 at its end")
+      .def_readonly("slip_driving", &SolverStats::slip_driving,
+                    "steps with a wheel whose slip drove its motion (slip from the step's start)")
       .def_readonly("obstacle_guessed", &SolverStats::obstacle_guessed,
                     "steps (substeps) with obstacle contacts all solved sticking (sparse path)")
       .def_readonly("obstacle_bounded", &SolverStats::obstacle_bounded,
@@ -302,7 +304,8 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.lcp_errors) + ", sparse_solves=" +
                std::to_string(s.sparse_solves) + ", dense_solves=" +
                std::to_string(s.dense_solves) + ", slip_solves=" +
-               std::to_string(s.slip_solves) + ", obstacle_guessed=" +
+               std::to_string(s.slip_solves) + ", slip_driving=" +
+               std::to_string(s.slip_driving) + ", obstacle_guessed=" +
                std::to_string(s.obstacle_guessed) + ", obstacle_bounded=" +
                std::to_string(s.obstacle_bounded) + ", obstacle_explicit=" +
                std::to_string(s.obstacle_explicit) + ", obstacle_implicit=" +

@@ -367,11 +367,26 @@ void RoverSim::Impl::step_once() {
   // couples them: Broyden's method on the four slips from J = -I (the first update is the
   // fixed-point step, eq 12 at the end), clamped to [-1, 1]. After kMaxSlipSolves solves the
   // step is solved once more at the best slips seen.
+  // Backward Euler is right where the slip damps the motion (the stalled wheel above: a larger
+  // slip gives a smaller end slip), not where it drives it. A wheel spinning against an obstacle
+  // face on soil stands at v_x ~ 0, where eq 12's factor (1 - exp(-eps v_x^2)) makes the slip, and
+  // with it the traction, grow with the forward speed: a negative damper, an unstable rate lambda
+  // of a few hundred 1/s. Backward Euler's amplification 1 / (1 - h lambda) is below 1 in magnitude
+  // for h lambda > 2 (negative for h lambda > 1), so at the default step it held the wheel at
+  // that stall, where fine steps climb the face and fall back (benchmarks/RESULTS.md, "Implicit
+  // slip only where it damps"). The secant d s_end / d sigma of a wheel's last two solves
+  // estimates h lambda; a wheel where it reaches 1 (the step's equation in sigma can then have
+  // several roots, and backward Euler reverses or damps the growth) takes its slip from
+  // the start of the step (forward Euler: amplification 1 + h lambda, a growing motion grows)
+  // and leaves the solve.
   const bool soft = opt.ground == GroundType::Soil;
   Eigen::Vector4d sigma, res = Eigen::Vector4d::Zero();
   for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
   Eigen::Vector4d best_sigma = sigma, prev_sigma = sigma, prev_res = res;
   Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
+  const Eigen::Vector4d start_sigma = sigma;
+  Eigen::Vector4d last_sigma = sigma, last_end = sigma;  // each wheel's last solve: sigma, s_end
+  std::array<bool, 4> driving{};  // explicit slip: the slip drives this wheel's motion
   double best = std::numeric_limits<double>::infinity();
   bool held = false;
   int attempts = 0;
@@ -387,15 +402,33 @@ void RoverSim::Impl::step_once() {
     held = solve_rows(guess, next, tried, attempts);
     if (!soft || solve > kMaxSlipSolves) break;
     double worst = 0.0;  // [N]: the implicit-slip error as a force (soil_terms_gap)
+    bool split = false;  // a wheel left the solve: its start slip needs one more solve
     for (int i = 0; i < 4; ++i) {
       res[i] = 0.0;
       if (!ground[i].active) continue;
+      soil_levels(i);  // the levels this solve reached: the next solve's (and step's) terms
+      if (driving[i]) continue;
       double vx = 0.0, vcx = 0.0;
       end_velocity(i, vx, vcx);
       const double s_end = soil.slip_ratio(vx, vcx);
       res[i] = s_end - sigma[i];
-      soil_levels(i);  // the levels this solve reached: the next solve's (and step's) terms
+      const double ds = sigma[i] - last_sigma[i], de = s_end - last_end[i];
+      last_sigma[i] = sigma[i];
+      last_end[i] = s_end;
+      if (solve > 0 && std::abs(ds) > kSlipTolerance && de / ds >= 1.0) {
+        driving[i] = split = true;  // h lambda >= 1: see above
+        res[i] = 0.0;
+        sigma[i] = start_sigma[i];
+        continue;
+      }
       worst = std::max(worst, soil_terms_gap(i, std::abs(res[i]) > kSlipTolerance ? s_end : sigma[i]));
+    }
+    if (split) {  // solve again: the driving wheels at their start slips, Broyden afresh
+      jac = -Eigen::Matrix4d::Identity();
+      prev_sigma = sigma;
+      prev_res = res;
+      best = std::numeric_limits<double>::infinity();
+      continue;
     }
     if (worst <= opt.slip_force_tolerance) break;
     if (worst < best) {
@@ -417,8 +450,10 @@ void RoverSim::Impl::step_once() {
     Eigen::Vector4d step = jac.partialPivLu().solve(-res);
     if (!step.allFinite()) step = res;  // singular: the fixed-point step
     for (int i = 0; i < 4; ++i)
-      sigma[i] = ground[i].active ? std::clamp(sigma[i] + step[i], -1.0, 1.0) : sigma[i];
+      sigma[i] = ground[i].active && !driving[i] ? std::clamp(sigma[i] + step[i], -1.0, 1.0)
+                                                : sigma[i];
   }
+  if (driving[0] || driving[1] || driving[2] || driving[3]) ++stats.slip_driving;
   if (opt.ground == GroundType::Rigid) commit_rigid();
   guesser.commit(next);
   if (n_obstacle_contacts > 0) {

@@ -140,6 +140,7 @@ class SolverStats:
     sparse_solves: int
     dense_solves: int
     slip_solves: int
+    slip_driving: int
     obstacle_guessed: int
     obstacle_bounded: int
     obstacle_explicit: int

@@ -42,3 +42,28 @@ def test_rock_contacts_are_guessed_and_counted_and_agree_with_the_bounded_path()
     # tyre's friction nears mu F_n)
     assert abs(guessed.state.position[0] - bounded.state.position[0]) < 1e-4
     assert D.SimOptions().guess_obstacle_contacts is True
+
+
+def test_a_wheel_spinning_against_a_face_takes_the_explicit_slip_and_keeps_climbing():
+    # The passive bogie pushing a 0.4 m wall on M90 without substeps (test_dynamics_substeps.cpp):
+    # at the foot of the face eq 12's slip drives the wheel, so those steps take the slip from
+    # the step's start (SolverStats.slip_driving, rover_step.cpp); the rest stays implicit.
+    o = D.make_options("soil", friction=0.7)
+    o.obstacle_substeps = 1
+    o.soil.eps_slip = 1e4
+    o.soil.eps_motion = 0.01
+    wall = [D.BoxObstacle(np.array([1.5, 0.0, 0.2]), np.array([0.3, 3.0, 0.4]), 0.0, 0.0, 0.0)]
+    sim = D.make_sim(obstacles=wall, options=o)
+    sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.2)
+    c = D.Commands()
+    c.gimbal_enabled = False
+    c.wheel_speed = [0.2 / sim.parameters.wheel_radius] * 4
+    sim.set_commands(c)
+    for _ in range(int(round(12.0 / o.dt))):
+        sim.step()
+    s = sim.solver_stats
+    assert 0 < s.slip_driving < 0.2 * s.steps
+    assert "slip_driving=" in repr(s)
+    # it kept climbing the face and falling back (dt / 8 throughout: 788 J; held at the foot of
+    # the face by the implicit slip it was 381 J)
+    assert sim.state.energy > 700.0
