@@ -286,9 +286,18 @@ bool RoverSim::Impl::touching_obstacles() {
 void RoverSim::Impl::step() {
   init_ode_once();
   obstacles_collected = false;
-  const int n = opt.obstacle_substeps;
+  int n = opt.obstacle_substeps;
   if (h != opt.dt) set_step_length(opt.dt);
   const bool touching = !diverged && touching_obstacles();
+  // With one substep, an obstacle step where a wheel's slip grew at a rate lambda in the last step
+  // with dt lambda >= 1/2 is split into ceil(2 dt lambda) substeps (at most 8) so that each has
+  // h lambda < 1/2. Near h lambda = 1 the implicit slip's amplification 1 / (1 - h lambda) turns
+  // from growth to reversal and the step's equation in sigma has several roots, and neither it
+  // nor the explicit slip (rover_step.cpp) follows a wheel that starts to surge up an obstacle's
+  // face: the surge aborts, and a wheel left at v_x -> 0 with eq 12's slip ~ eps v_x^2 (no feedback)
+  // stays there spinning (benchmarks/RESULTS.md, "One substep at every step size").
+  if (n == 1 && touching && 2.0 * opt.dt * slip_rate >= 1.0)
+    n = static_cast<int>(std::min(8.0, std::ceil(2.0 * opt.dt * slip_rate)));
   stats.obstacles_touched = n_touched;
   if (n == 1 || !touching) {
     step_once();

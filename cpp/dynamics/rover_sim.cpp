@@ -378,6 +378,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   rigid_deflection.fill(Vec3::Zero());
   obstacle_mode.fill(RowState::Free);
   obstacle_next = obstacle_mode;  // (see restore())
+  slip_rate = 0.0;
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);

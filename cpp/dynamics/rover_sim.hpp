@@ -231,6 +231,9 @@ struct Snapshot {
   std::array<std::array<double, 3>, 4> rigid_deflection{};
   /// Each wheel's obstacle contacts guessed sticking (Free) or bounded (rover_rigid.cpp).
   std::array<RowState, 4> obstacle_mode{};
+  /// The largest growth rate of a wheel's slip estimated in the last step [1/s]; it decides the
+  /// next obstacle step's substeps when SimOptions::obstacle_substeps is 1 (obstacle_contacts.cpp).
+  double slip_rate = 0.0;
   /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
   /// of the steps that follow; internal layout, see cpp/dynamics/ode_lcp.hpp).
   std::vector<std::uint64_t> solver_patterns;

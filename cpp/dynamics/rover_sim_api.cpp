@@ -2,6 +2,7 @@
 // state vector) over RoverSim::Impl (rover_sim_impl.hpp); the model is built in rover_sim.cpp.
 #include "ernest/dynamics/rover_sim.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -167,6 +168,7 @@ Snapshot RoverSim::snapshot() const {
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < 3; ++k) s.rigid_deflection[i][k] = impl_->rigid_deflection[i][k];
   s.obstacle_mode = impl_->obstacle_mode;
+  s.slip_rate = impl_->slip_rate;
   impl_->lcp.save(s.solver_patterns);
   s.valid = true;
   return s;
@@ -205,6 +207,9 @@ void RoverSim::restore(const Snapshot& s) {
     require(m == RowState::Free || m == RowState::Bounded,
             "RoverSim.restore: corrupt snapshot (obstacle_mode)");
   impl_->obstacle_mode = s.obstacle_mode;
+  require(std::isfinite(s.slip_rate) && s.slip_rate >= 0.0,
+          "RoverSim.restore: corrupt snapshot (slip_rate)");
+  impl_->slip_rate = s.slip_rate;
   // A step without obstacle contacts keeps obstacle_next as it was (settle_obstacles is not
   // called) and then takes it as obstacle_mode: between steps the two are equal, and a restored
   // (or reset) rover must have them equal too, else its first step off the rocks takes the

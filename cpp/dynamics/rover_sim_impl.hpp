@@ -219,6 +219,10 @@ struct RoverData {
   std::array<bool, detail::kMaxObstacleContacts> obstacle_wheel_first{};
   std::array<dJointFeedback, detail::kMaxObstacleContacts> obstacle_fb{};
   std::array<RowState, 4> obstacle_mode{}, obstacle_try{}, obstacle_next{};
+  // The largest growth rate lambda [1/s] of a wheel's slip estimated in the last step (the secant
+  // d s_end / d sigma over h, step_once; 0 where none was measured); step() substeps an obstacle
+  // step whose h lambda would reach 1/2 (in the Snapshot).
+  double slip_rate = 0.0;
   std::uint64_t obstacle_off = 0;
   bool rows_held = true;  // settle(): the guessed rows (not the obstacles) held
   std::array<dGeomID, detail::kMaxObstacleContacts> touched{};  // obstacles in the contacts

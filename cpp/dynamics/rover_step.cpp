@@ -387,6 +387,7 @@ void RoverSim::Impl::step_once() {
   const Eigen::Vector4d start_sigma = sigma;
   Eigen::Vector4d last_sigma = sigma, last_end = sigma;  // each wheel's last solve: sigma, s_end
   std::array<bool, 4> driving{};  // explicit slip: the slip drives this wheel's motion
+  double rate = 0.0;  // the largest secant over h: slip_rate (see step() in obstacle_contacts.cpp)
   double best = std::numeric_limits<double>::infinity();
   bool held = false;
   int attempts = 0;
@@ -415,6 +416,7 @@ void RoverSim::Impl::step_once() {
       const double ds = sigma[i] - last_sigma[i], de = s_end - last_end[i];
       last_sigma[i] = sigma[i];
       last_end[i] = s_end;
+      if (solve > 0 && std::abs(ds) > kSlipTolerance) rate = std::max(rate, de / (ds * h));
       if (solve > 0 && std::abs(ds) > kSlipTolerance && de / ds >= 1.0) {
         driving[i] = split = true;  // h lambda >= 1: see above
         res[i] = 0.0;
@@ -454,6 +456,7 @@ void RoverSim::Impl::step_once() {
                                                 : sigma[i];
   }
   if (driving[0] || driving[1] || driving[2] || driving[3]) ++stats.slip_driving;
+  slip_rate = rate;
   if (opt.ground == GroundType::Rigid) commit_rigid();
   guesser.commit(next);
   if (n_obstacle_contacts > 0) {
