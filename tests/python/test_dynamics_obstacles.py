@@ -67,3 +67,20 @@ def test_a_wheel_spinning_against_a_face_takes_the_explicit_slip_and_keeps_climb
     # it kept climbing the face and falling back (dt / 8 throughout: 788 J; held at the foot of
     # the face by the implicit slip it was 381 J)
     assert sim.state.energy > 700.0
+
+
+def test_one_substep_at_half_the_step_climbs_the_wheel_high_step_like_the_default():
+    # The passive bogie at the wheel-high step (evaluate.COURSES), one obstacle substep at dt / 2:
+    # near h lambda = 1 the surge up the face aborted and the wheel stayed spinning at v_x ~ 0 from
+    # 37 s on (CoT 6.52 against 9.72 with the default substeps); obstacle steps where a wheel's
+    # slip grows at dt lambda >= 1/2 are now split (obstacle_contacts.cpp, step()).
+    import ernest_cpp.envs  # noqa: F401  (registers the ids)
+    from ernest_cpp import evaluate
+
+    pol, passive = evaluate.controllers(None)[evaluate.PASSIVE]
+    dt = D.SimOptions().dt
+    ref = evaluate.run_episode("ernest/WheelStep-v0", {}, pol, passive, 0)[0]
+    half = evaluate.run_episode("ernest/WheelStep-v0", dict(physics_dt=dt / 2, obstacle_substeps=1),
+                                pol, passive, 0)[0]
+    assert abs(half["travel_reduction"] - ref["travel_reduction"]) < 0.02
+    assert abs(half["cost_of_transport"] / ref["cost_of_transport"] - 1.0) < 0.05
