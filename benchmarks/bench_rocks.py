@@ -3,8 +3,8 @@ is touching at the start of the step (SolverStats.obstacles_touched), not merely
 rover drives 0.15 m/s on M90 through two fields: low flat rocks that the wheels roll onto
 (their contacts stick: the guessed path) and 100 box rocks that stop the rover (a wheel spinning
 against a rock face slides: ODE's bounded contact); every step is timed on its own and binned by
-the rocks in contact. Each step in contact is obstacle_substeps = 8 substeps
-(issues 13 and 17); "substeps off" is timed too. Reference in the same run: the same rover with the rock
+the rocks in contact. Timed with the default obstacle_substeps (1 since session 9: a step in
+contact split only where a wheel's slip grows fast) and with 8 (before session 9; the defaults of --substeps). Reference in the same run: the same rover with the rock
 contacts always solved with their friction bounds (SimOptions.guess_obstacle_contacts = False,
 ODE's pivoting solver, as before issue 17), on the same rocks; and the cost of an empty call
 from Python (step_n(0)), which every timed step includes.
@@ -57,8 +57,8 @@ def run(rocks, steps: int, substeps: int, guess: bool):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=2400, help="steps per run (30 s at 0.0125 s)")
-    ap.add_argument("--substeps", type=int, nargs="+", default=[D.SimOptions().obstacle_substeps, 1],
-                    help="SimOptions.obstacle_substeps values to time (default: the default, and 1)")
+    ap.add_argument("--substeps", type=int, nargs="+", default=sorted({D.SimOptions().obstacle_substeps, 8}, reverse=True),
+                    help="SimOptions.obstacle_substeps values to time (default: 8 and the default)")
     ap.add_argument("--dump-rocks", nargs=2, metavar=("N", "FILE"),
                     help="write bench_dynamics.py's N rocks (rock_field(N, seed=7, length=2, width=2, "
                          "x0=0.8)) to FILE, one 'cx cy cz sx sy sz yaw' a line, for "

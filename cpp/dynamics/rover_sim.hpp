@@ -98,14 +98,13 @@ struct SimOptions {
   /// by ODE's implicit ERP/CFM elsewhere. The passive bogie spinning its wheels against a box
   /// face (the Bickler trap, the wheel-high step) climbs and falls back at fine steps; it settled
   /// at coarse ones because the implicit slip held the wheel at the stall, which the slip taken
-  /// explicitly where it drives the motion now avoids (rover_step.cpp). 1 and 4 substeps then
-  /// reproduce dt / 8 on every evaluation course, but 2 still settle in the Bickler trap, so the
-  /// default stays 8 (benchmarks/RESULTS.md, "Implicit slip only where it damps"). 1 = none,
-  /// except that an obstacle step after one where a wheel's slip grew at a rate lambda with
-  /// dt lambda >= 1/2 is split into ceil(2 dt lambda) <= 8 substeps (RoverSim::Impl::step;
-  /// RESULTS.md, "One substep at every step size"): with it the obstacle rows of
-  /// bench_step_ladder.py hold at 1 substep (within 3.1 % of dt / 16).
-  int obstacle_substeps = 8;
+  /// explicitly where it drives the motion now avoids (rover_step.cpp). With 1 (the default since
+  /// session 9; 8 before) an obstacle step after one where a wheel's slip grew at a rate lambda
+  /// with dt lambda >= 1/2 is split into ceil(2 dt lambda) <= 8 substeps (RoverSim::Impl::step):
+  /// every obstacle row of bench_step_ladder.py is then within 3.1 % of dt / 16 at dt, dt/2, dt/4
+  /// and dt/8 (benchmarks/RESULTS.md, "One substep at every step size"). n > 1 substeps every
+  /// obstacle step (the pre-session-9 behaviour with 8; comparisons).
+  int obstacle_substeps = 1;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
   void validate() const;

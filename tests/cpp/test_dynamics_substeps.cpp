@@ -3,8 +3,9 @@
 // steps and settled at coarse ones: the implicit slip (backward Euler in seed 004 eq 12) held the
 // wheel at the stall, where the slip grows with the forward speed and drives the motion. With the
 // slip taken from the step's start where it drives (rover_step.cpp), 1 substep reproduces the
-// fine steps here (but 2 do not on the Bickler course, so the default stays 8: benchmarks/
-// RESULTS.md, "Implicit slip only where it damps").
+// fine steps here; with the obstacle step split where a wheel's slip grows fast
+// (obstacle_contacts.cpp) 1 is the default since session 9 (benchmarks/RESULTS.md, "One substep
+// at every step size"), and these tests hold for it.
 #include <gtest/gtest.h>
 
 #include <cmath>
