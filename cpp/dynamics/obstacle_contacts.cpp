@@ -58,9 +58,12 @@ SpringDamperRow spring_damper_row(double k, double c, double h, double mass_boun
   if (r.explicit_spring) {  // lambda = k depth(start) - c v_n'
     r.erp = h * k / c;
     r.cfm = 1.0 / c;
-  } else {  // lambda = k depth(end) - c v_n' (as RigidContactParameters::erp / cfm)
-    r.erp = h * k / (h * k + c);
-    r.cfm = 1.0 / (h * k + c);
+  } else {  // lambda = k depth(end) - c v_n': rigid ground's form
+    soil::RigidContactParameters implicit_row;
+    implicit_row.stiffness = k;
+    implicit_row.damping = c;
+    r.erp = implicit_row.erp(h);
+    r.cfm = implicit_row.cfm(h);
   }
   return r;
 }
@@ -281,7 +284,7 @@ bool RoverSim::Impl::touching_obstacles() {
 }
 
 // One step of opt.dt; where a wheel touches an obstacle, opt.obstacle_substeps steps of
-// opt.dt / n (SimOptions::obstacle_substeps: the contact is under-resolved at the default step).
+// opt.dt / n, and with the default of one, more where a wheel's slip grew fast (below).
 // A force added with add_force() acts over the whole step.
 void RoverSim::Impl::step() {
   init_ode_once();
@@ -296,8 +299,9 @@ void RoverSim::Impl::step() {
   // nor the explicit slip (rover_step.cpp) follows a wheel that starts to surge up an obstacle's
   // face: the surge aborts, and a wheel left at v_x -> 0 with eq 12's slip ~ eps v_x^2 (no feedback)
   // stays there spinning (benchmarks/RESULTS.md, "One substep at every step size").
+  constexpr double kMaxSplit = 8.0;  // the substeps every obstacle step took before session 9
   if (n == 1 && touching && 2.0 * opt.dt * slip_rate >= 1.0)
-    n = static_cast<int>(std::min(8.0, std::ceil(2.0 * opt.dt * slip_rate)));
+    n = static_cast<int>(std::min(kMaxSplit, std::ceil(2.0 * opt.dt * slip_rate)));
   stats.obstacles_touched = n_touched;
   if (n == 1 || !touching) {
     step_once();

@@ -416,12 +416,14 @@ void RoverSim::Impl::step_once() {
       const double ds = sigma[i] - last_sigma[i], de = s_end - last_end[i];
       last_sigma[i] = sigma[i];
       last_end[i] = s_end;
-      if (solve > 0 && std::abs(ds) > kSlipTolerance) rate = std::max(rate, de / (ds * h));
-      if (solve > 0 && std::abs(ds) > kSlipTolerance && de / ds >= 1.0) {
-        driving[i] = split = true;  // h lambda >= 1: see above
-        res[i] = 0.0;
-        sigma[i] = start_sigma[i];
-        continue;
+      if (solve > 0 && std::abs(ds) > kSlipTolerance) {  // a secant was measured
+        rate = std::max(rate, de / (ds * h));
+        if (de / ds >= 1.0) {
+          driving[i] = split = true;  // h lambda >= 1: see above
+          res[i] = 0.0;
+          sigma[i] = start_sigma[i];
+          continue;
+        }
       }
       worst = std::max(worst, soil_terms_gap(i, std::abs(res[i]) > kSlipTolerance ? s_end : sigma[i]));
     }
