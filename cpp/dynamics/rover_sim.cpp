@@ -384,7 +384,6 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   explicit_motor_torque.fill(0.0);
   pending_force.setZero();
   diverged = false;
-  callback_error = nullptr;
 }
 
 }  // namespace ernest::dynamics

@@ -187,7 +187,6 @@ struct RoverData {
   dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
   // Ground feedback: each wheel's contact with the terrain (rover_rows.cpp).
   std::array<dJointFeedback, 4> ground_fb{};
-  std::exception_ptr callback_error;
 
   // ---- per-step working data ----
   std::array<detail::GroundContact, 4> ground{};
