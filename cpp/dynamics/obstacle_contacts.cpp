@@ -219,50 +219,61 @@ void RoverSim::Impl::prepare_obstacles() {
   n_obstacle_contacts = 0;
   n_touched = 0;
   if (obstacle_geoms.empty()) return;
+  const double wheel_radius = p.wheel_radius, wheel_half_width = 0.5 * p.wheel_width;
   // Broad phase: the rover's bounding box against each obstacle's (static: taken once by
   // build()), then each rover geom's box against it, and for a wheel the exact early-outs of
-  // cylinder_box_disjoint(); near() (ODE's collider) only for what remains. dSpaceCollide2 of
-  // the two simple spaces tested every rover geom against every obstacle (6 x 100 box tests a
-  // call: 10 % of a step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without
-  // substeps"); of the rover's space against each overlapping obstacle it still cost 1.1k
-  // instructions a step over its 6 geoms, and 28 % of its cylinder-box calls found no contact
-  // (RESULTS.md, "Session 10: collision"). The geoms are visited in the space's own order (the
-  // one dSpaceCollide2 took: ODE moves a geom to the front when its body moves) with ODE's own
-  // box test (collideAABBs), so the contacts and their order are the same as before.
-  dReal box[6];
-  dGeomGetAABB(reinterpret_cast<dGeomID>(rover_space), box);  // updates every geom's box
-  const int n_geoms = std::min(dSpaceGetNumGeoms(rover_space), 6);
-  std::array<dGeomID, 6> g{};
-  std::array<std::array<dReal, 6>, 6> gbox{};
-  std::array<bool, 6> wheel{};
-  for (int j = 0; j < n_geoms; ++j) {
-    g[j] = dSpaceGetGeom(rover_space, j);
-    dGeomGetAABB(g[j], gbox[j].data());
-    wheel[j] = std::find(geom.begin() + 2, geom.end(), g[j]) != geom.end();
+  // cylinder_box_disjoint(); ODE's collider (near()) only for what remains. dSpaceCollide2 of the
+  // two simple spaces tested every rover geom against every obstacle (6 x 100 box tests a call:
+  // 10 % of a step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps"); of
+  // the rover's space against each overlapping obstacle, its boxes and call overhead still cost
+  // 2.5k instructions a step, and a quarter of its cylinder-box calls among 20 rocks found no
+  // contact (RESULTS.md, "Session 10: collision"). The geoms' boxes here are exact for their
+  // shapes (a box's as ODE's; a cylinder's projection on each axis, tighter than ODE's square
+  // one), kDisjointMargin wider: disjoint boxes prove disjoint shapes, where ODE finds no point.
+  // The geoms are visited in a fixed order (chassis, bogie, wheels), the contacts in that order.
+  std::array<std::array<double, 6>, 6> gbox;
+  std::array<double, 6> box = {HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL};
+  std::array<Vec3, 6> centre;
+  std::array<Mat3, 6> frame;
+  for (int j = 0; j < 6; ++j) {
+    centre[j] = to_vec(dGeomGetPosition(geom[j]));
+    frame[j] = to_mat(dGeomGetRotation(geom[j]));
+    Vec3 ext;
+    if (j >= 2) {  // the cylinder's axis: its local z
+      const Vec3 u = frame[j].col(2);
+      ext = wheel_radius * (Vec3::Ones() - u.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt() +
+            wheel_half_width * u.cwiseAbs();
+    } else {
+      dVector3 lengths;
+      dGeomBoxGetLengths(geom[j], lengths);
+      ext = frame[j].cwiseAbs() * (0.5 * to_vec(lengths));
+    }
+    for (int i = 0; i < 3; ++i) {
+      gbox[j][2 * i] = centre[j][i] - ext[i] - kDisjointMargin;
+      gbox[j][2 * i + 1] = centre[j][i] + ext[i] + kDisjointMargin;
+      box[2 * i] = std::min(box[2 * i], gbox[j][2 * i]);
+      box[2 * i + 1] = std::max(box[2 * i + 1], gbox[j][2 * i + 1]);
+    }
   }
   for (std::size_t i = 0; i < obstacle_geoms.size(); ++i) {
     const std::array<double, 6>& ob = obstacle_aabb[i];
-    if (ob[0] > box[1] || ob[1] < box[0] || ob[2] > box[3] || ob[3] < box[2] || ob[4] > box[5] ||
-        ob[5] < box[4])
-      continue;
+    const auto apart = [&](const std::array<double, 6>& b1) {
+      return b1[0] > ob[1] || b1[1] < ob[0] || b1[2] > ob[3] || b1[3] < ob[2] || b1[4] > ob[5] ||
+             b1[5] < ob[4];
+    };
+    if (apart(box)) continue;
     const dGeomID rock = obstacle_geoms[i];
-    for (int j = 0; j < n_geoms; ++j) {
-      const std::array<dReal, 6>& b1 = gbox[j];
-      if (b1[0] > ob[1] || b1[1] < ob[0] || b1[2] > ob[3] || b1[3] < ob[2] || b1[4] > ob[5] ||
-          b1[5] < ob[4])
-        continue;
-      if (wheel[j]) {
-        dReal radius, length;
+    for (int j = 0; j < 6; ++j) {
+      if (apart(gbox[j])) continue;
+      if (j >= 2) {
         dVector3 lengths;
-        dGeomCylinderGetParams(g[j], &radius, &length);
         dGeomBoxGetLengths(rock, lengths);
-        const Mat3 rw = to_mat(dGeomGetRotation(g[j]));  // column 2: the cylinder's axis
-        if (cylinder_box_disjoint(to_vec(dGeomGetPosition(g[j])), rw.col(2), radius, 0.5 * length,
+        if (cylinder_box_disjoint(centre[j], frame[j].col(2), wheel_radius, wheel_half_width,
                                   to_vec(dGeomGetPosition(rock)), to_mat(dGeomGetRotation(rock)),
                                   0.5 * to_vec(lengths)))
           continue;
       }
-      near(g[j], rock);
+      near(geom[j], rock);
     }
   }
   set_obstacle_rows();
