@@ -255,7 +255,24 @@ void RoverSim::Impl::prepare_obstacles() {
       box[2 * i + 1] = std::max(box[2 * i + 1], gbox[j][2 * i + 1]);
     }
   }
-  for (std::size_t i = 0; i < obstacle_geoms.size(); ++i) {
+  // The obstacles whose boxes may overlap the rover's along x: lowest x within the widest box's
+  // width below the rover's box, found by bisection of the obstacles sorted by it; visited in
+  // their own order (the order of the contacts), or all of them if there are too many.
+  std::array<int, kMaxObstacleContacts> near_x;
+  int n_near = 0;
+  const auto by_x = [&](double x) {
+    return std::lower_bound(obstacle_by_x.begin(), obstacle_by_x.end(), x,
+                            [&](int k, double v) { return obstacle_aabb[k][0] < v; });
+  };
+  const auto first = by_x(box[0] - obstacle_max_width), last = by_x(box[1]);
+  const bool all = last - first > static_cast<std::ptrdiff_t>(near_x.size());
+  if (!all) {
+    for (auto k = first; k != last; ++k) near_x[n_near++] = *k;
+    std::sort(near_x.begin(), near_x.begin() + n_near);
+  }
+  const int n_visit = all ? static_cast<int>(obstacle_geoms.size()) : n_near;
+  for (int v = 0; v < n_visit; ++v) {
+    const int i = all ? v : near_x[v];
     const std::array<double, 6>& ob = obstacle_aabb[i];
     const auto apart = [&](const std::array<double, 6>& b1) {
       return b1[0] > ob[1] || b1[1] < ob[0] || b1[2] > ob[3] || b1[3] < ob[2] || b1[4] > ob[5] ||
