@@ -227,9 +227,9 @@ void RoverSim::Impl::prepare_obstacles() {
   // 10 % of a step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps"); of
   // the rover's space against each overlapping obstacle, its boxes and call overhead still cost
   // 2.5k instructions a step, and a quarter of its cylinder-box calls among 20 rocks found no
-  // contact (RESULTS.md, "Session 10: collision"). The geoms' boxes here are exact for their
-  // shapes (a box's as ODE's; a cylinder's projection on each axis, tighter than ODE's square
-  // one), kDisjointMargin wider: disjoint boxes prove disjoint shapes, where ODE finds no point.
+  // contact (RESULTS.md, "Session 10: collision"). The geoms' boxes here are ODE's own formulas
+  // (a box's, a cylinder's projection on each axis: exact) without cleaning ODE's space, and
+  // kDisjointMargin wider: disjoint boxes prove disjoint shapes, where ODE finds no point.
   // The geoms are visited in a fixed order (chassis, bogie, wheels), the contacts in that order.
   std::array<std::array<double, 6>, 6> gbox;
   std::array<double, 6> box = {HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL};
