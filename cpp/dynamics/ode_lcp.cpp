@@ -412,8 +412,8 @@ bool solve_coulomb(LcpWorkspace& ws, unsigned n, unsigned nub, double* pairsbx,
 }  // namespace
 
 LdltPlan* LcpWorkspace::find(const unsigned* rows, int n, int stride) {
-  for (LdltPlan& p : plans)
-    if (p.same_rows(rows, n, stride)) return &p;
+  for (int q = 0; q < kPlans; ++q)  // (a constant count: unrolled)
+    if (q < n_plans && plans[q].same_rows(rows, n, stride)) return &plans[q];
   return nullptr;
 }
 
@@ -423,11 +423,14 @@ const LdltPlan& LcpWorkspace::adopt(LdltPlan* remembered, const LdltPlan::Mask* 
     std::array<LdltPlan::Mask, LdltPlan::kMaxRows> u;
     for (int i = 0; i < n; ++i) u[i] = remembered->pattern()[i] | pattern[i];
     remembered->analyse(u.data(), rows, n, stride);
+    ++plans_grown;
     return *remembered;
   }
   LdltPlan& p = plans[next_plan];
+  n_plans = std::max(n_plans, next_plan + 1);
   next_plan = (next_plan + 1) % kPlans;
   p.analyse(pattern, rows, n, stride);
+  ++plans_made;
   return p;
 }
 
@@ -447,13 +450,14 @@ void LcpWorkspace::remember(Guess* known, unsigned n, LdltPlan::Mask bounded,
 }
 
 void LcpWorkspace::clear() {
-  plans = {};
+  n_plans = 0;
   next_plan = 0;
   guesses = {};
   next_guess = 0;
 }
 
-// Layout: next_plan, then per plan n (0: unused), stride, rows[n], pattern[n]; then
+// Layout: next_plan, then per slot n (0: not remembered; only after the remembered ones),
+// stride, rows[n], pattern[n]; then
 // next_guess and per guess n, bounded, active, at_lo; each row set (mask) as two words, low first.
 void LcpWorkspace::save(std::vector<std::uint64_t>& out) const {
   out.clear();
@@ -462,9 +466,10 @@ void LcpWorkspace::save(std::vector<std::uint64_t>& out) const {
     out.push_back(static_cast<std::uint64_t>(m >> 64));
   };
   out.push_back(static_cast<std::uint64_t>(next_plan));
-  for (const LdltPlan& p : plans) {
-    out.push_back(static_cast<std::uint64_t>(p.size()));
-    if (p.size() == 0) continue;
+  for (int q = 0; q < kPlans; ++q) {
+    const LdltPlan& p = plans[q];
+    out.push_back(q < n_plans ? static_cast<std::uint64_t>(p.size()) : 0u);
+    if (q >= n_plans) continue;
     out.push_back(static_cast<std::uint64_t>(p.stride()));
     for (int i = 0; i < p.size(); ++i) out.push_back(p.rows()[i]);
     for (int i = 0; i < p.size(); ++i) put(p.pattern()[i]);
@@ -495,10 +500,12 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
   };
   const std::uint64_t np = next();
   if (np >= kPlans) bad();
-  for (LdltPlan& p : plans) {
+  int remembered = 0;
+  for (int q = 0; q < kPlans; ++q) {
+    LdltPlan& p = plans[q];
     const std::uint64_t n = next();
     if (n == 0) continue;
-    if (n > LdltPlan::kMaxRows) bad();
+    if (n > LdltPlan::kMaxRows || q != remembered++) bad();  // the remembered slots come first
     const std::uint64_t stride = next();
     std::array<unsigned, LdltPlan::kMaxRows> rows;
     std::array<LdltPlan::Mask, LdltPlan::kMaxRows> pattern;
@@ -524,6 +531,9 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
     g = Guess{static_cast<unsigned>(n), bounded, active, at_lo};
   }
   if (k != in.size()) bad();
+  // Round robin fills the slots in order: the next one is the first empty one until all are used.
+  if (remembered < kPlans && np != static_cast<std::uint64_t>(remembered)) bad();
+  n_plans = remembered;
   next_plan = static_cast<int>(np);
   next_guess = static_cast<int>(ng);
 }

@@ -28,15 +28,23 @@ namespace ernest::dynamics::detail {
 /// Plans are remembered per set of solved rows. The numeric pattern of A flickers as the rover
 /// moves through symmetric poses (an entry between two rows on one body is exactly zero in some
 /// configurations), so a plan is analysed from the union of the patterns its rows have shown and
-/// kept while every new pattern lies within its factor. Which bounded rows were solved inside
-/// their bounds is remembered per set of bounded rows and is the next guess. Both depend on the
-/// history: save() and load() carry them through Snapshot, and clear() starts a run afresh
-/// (reset), so that repeats stay bit-exact.
+/// kept while every new pattern lies within its factor. On rocks most row sets are new (a
+/// contact's rows renumber the rows after them: 85 of the 123 plans made in 850 steps of
+/// benchmarks/profile_rocks on 20 rocks), so more plans save few analyses, and evicting the least
+/// recently used keeps grown plans longer, which factorise more slowly than the analyses they
+/// save: the oldest plan makes room (benchmarks/RESULTS.md, "Session 10: plan memory"). Which
+/// bounded rows were solved inside their bounds is remembered per set of bounded rows and is the
+/// next guess. Both depend on the history: save() and load() carry them through Snapshot, and
+/// clear() starts a run afresh (reset), so that repeats stay bit-exact.
 struct LcpWorkspace {
   bool enabled = true;  // false: count the solves, hand all of them to ODE
   static constexpr int kPlans = 4;  // sets of rows remembered (a wheel leaving the ground and back)
   std::array<LdltPlan, kPlans> plans{};
-  int next_plan = 0;
+  int n_plans = 0;    // plans[0, n_plans) are remembered (clear() need not wipe 650 kB of plans)
+  int next_plan = 0;  // the slot of the next new plan (round robin)
+  /// Plans analysed (LdltPlan::analyse) for row sets not remembered, and remembered plans
+  /// analysed again grown by a pattern outside their factor (counted from construction).
+  std::uint64_t plans_made = 0, plans_grown = 0;
   /// Bounded rows (bit i: row i) solved inside their bounds when these rows were bounded.
   /// Friction rows (findex) are bounded rows too: active = inside, else at +-mu x_k (at_lo: -).
   struct Guess {

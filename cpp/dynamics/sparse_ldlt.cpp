@@ -49,6 +49,35 @@ bool LdltPlan::covers(const Mask* pattern) const {
   return outside == 0;
 }
 
+namespace {
+// Row sets as words: 64-bit when the rows fit (one instruction per bit operation), else Mask.
+template <class W>
+constexpr int kBits = static_cast<int>(8 * sizeof(W));
+inline int word_low(std::uint64_t m) { return __builtin_ctzll(m); }
+inline int word_low(Mask m) { return mask_low(m); }
+inline int word_pop(std::uint64_t m) { return __builtin_popcountll(m); }
+inline int word_pop(Mask m) { return mask_count(m); }
+template <class W>
+inline W word_bit(int i) { return W{1} << i; }
+// Bits [0, i): the rows before row i (0 <= i <= kBits).
+template <class W>
+inline W before(int i) { return i == kBits<W> ? ~W{0} : word_bit<W>(i) - 1; }
+// Bits [first, first + count) (count >= 1, first + count <= kBits).
+template <class W>
+inline W span(int first, int count) { return before<W>(count) << first; }
+// Length of the run of set bits of m from bit `from` (< kBits) upwards (0 if that bit is clear).
+template <class W>
+inline int run_from(W m, int from) {
+  const W rest = ~(m >> from);
+  return rest ? word_low(rest) : kBits<W> - from;
+}
+}  // namespace
+
+// Every step works on row sets (bit masks, in 64-bit words for up to 64 rows) and touches each
+// non-zero of A and of L a few times, never every pair of rows: a new row set of a rock step is
+// analysed while the step waits. Also compiled for AVX2 (common/vector_math.hpp), whose popcnt
+// and tzcnt count rows in one instruction (integer work: the same plan).
+ERNEST_ALSO_AVX2
 void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int stride) {
   n_ = n;
   stride_ = stride;
@@ -57,122 +86,151 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     pattern_[i] = pattern[i];
     rows_[i] = rows[i];
   }
-  // Symmetric adjacency without the diagonal.
-  std::array<Mask, kMaxRows> adj{};
-  for (int i = 0; i < n; ++i) {
-    Mask m = pattern[i] & ~bit(i);
-    while (m) {
-      const int j = low(m);
-      m &= m - 1;
-      adj[i] |= bit(j);
-      adj[j] |= bit(i);
+  const auto analyse_as = [&](auto word) __attribute__((always_inline)) {
+    using W = decltype(word);
+    constexpr int bits = kBits<W>;
+    const auto bit = [](int i) { return word_bit<W>(i); };
+    const auto low = [](W m) { return word_low(m); };
+    std::array<W, kMaxRows> adj;  // symmetric adjacency without the diagonal
+    for (int i = 0; i < n; ++i) adj[i] = static_cast<W>(pattern[i]) & ~bit(i);
+    for (int i = 0; i < n; ++i)
+      for (W m = static_cast<W>(pattern[i]) & before<W>(i); m; m &= m - 1) adj[low(m)] |= bit(i);
+    // Minimum degree (ties: lowest row), eliminating on the masks; each eliminated row's live
+    // neighbours are its column of L. Once the live rows form a clique they are the dense tail.
+    // A row's degree changes only when it neighbours the eliminated row: kept, not recounted;
+    // the live rows of each degree are a set (by_degree), so the lowest row of least degree is
+    // found without a scan of all rows.
+    std::array<W, kMaxRows> column;  // L's column pattern, row numbering
+    std::array<int, kMaxRows> degree;
+    std::array<W, kMaxRows> by_degree;
+    for (int d = 0; d < n; ++d) by_degree[d] = 0;
+    for (int i = 0; i < n; ++i) {
+      degree[i] = word_pop(adj[i]);
+      by_degree[degree[i]] |= bit(i);
     }
-  }
-  // Minimum degree (ties: lowest row), eliminating on the masks; each eliminated row's live
-  // neighbours are its column of L. Once the live rows form a clique they are the dense tail.
-  // A row's degree changes only when it neighbours the eliminated row: kept, not recounted.
-  std::array<Mask, kMaxRows> column{};  // L's column pattern, row numbering
-  std::array<int, kMaxRows> degree;
-  for (int i = 0; i < n; ++i) degree[i] = pop(adj[i]);
-  Mask alive = n == kMaxRows ? ~Mask{0} : bit(n) - 1;
-  int k = 0;
-  for (; k < n; ++k) {
-    int best = -1, best_degree = kMaxRows;
-    for (Mask m = alive; m; m &= m - 1) {
-      const int v = low(m);
-      if (degree[v] < best_degree) best_degree = degree[v], best = v;
+    W alive = before<W>(n);
+    int k = 0, least = 0;
+    for (; k < n; ++k) {
+      while (!by_degree[least]) ++least;
+      const int best = low(by_degree[least]);
+      if (least == n - k - 1) break;  // every live row is adjacent to every other
+      by_degree[least] &= ~bit(best);
+      const W nb = adj[best] & alive;
+      const W left = alive & ~bit(best);
+      for (W m = nb; m; m &= m - 1) {
+        const int v = low(m);
+        adj[v] |= nb & ~bit(v);
+        const int d = word_pop(adj[v] & left);
+        if (d != degree[v]) {
+          by_degree[degree[v]] &= ~bit(v);
+          by_degree[d] |= bit(v);
+          degree[v] = d;
+          least = std::min(least, d);
+        }
+      }
+      column[k] = nb;
+      perm_[k] = static_cast<std::uint8_t>(best);
+      alive = left;
     }
-    if (best_degree == n - k - 1) break;  // every live row is adjacent to every other
-    const Mask nb = adj[best] & alive;
-    const Mask left = alive & ~bit(best);
-    for (Mask m = nb; m; m &= m - 1) {
-      const int v = low(m);
-      adj[v] |= nb & ~bit(v);
-      degree[v] = pop(adj[v] & left);
+    dense_from_ = k;
+    for (W m = alive; m; m &= m - 1) perm_[k++] = static_cast<std::uint8_t>(low(m));
+    std::array<int, kMaxRows> pos;
+    for (int p = 0; p < n; ++p) pos[perm_[p]] = p;
+    // L + D's pattern (row numbering, lower): each column's rows, the tail a clique.
+    for (int i = 0; i < n; ++i)
+      filled_[i] = bit(i) | ((alive >> i & 1) ? alive & before<W>(i) : W{0});
+    for (int c = 0; c < dense_from_; ++c) {
+      const int pc = perm_[c];
+      filled_[pc] |= column[c] & before<W>(pc);
+      for (W m = column[c] & ~before<W>(pc + 1); m; m &= m - 1) filled_[low(m)] |= bit(pc);
     }
-    column[k] = nb;
-    perm_[k] = static_cast<std::uint8_t>(best);
-    alive &= ~bit(best);
-  }
-  dense_from_ = k;
-  for (Mask m = alive; m; m &= m - 1) perm_[k++] = static_cast<std::uint8_t>(low(m));
-  std::array<int, kMaxRows> pos{};
-  for (int p = 0; p < n; ++p) pos[perm_[p]] = p;
-  for (int i = 0; i < n; ++i) filled_[i] = bit(i);
-  const auto fill = [&](int i, int j) { filled_[std::max(i, j)] |= bit(std::min(i, j)); };
-  for (int c = 0; c < dense_from_; ++c)
-    for (Mask m = column[c]; m; m &= m - 1) fill(perm_[c], low(m));
-  for (int r = dense_from_; r < n; ++r)
-    for (int c = dense_from_; c < r; ++c) fill(perm_[r], perm_[c]);
 
-  // Sparse columns as position lists (ascending) and runs; the entries of L's pattern to copy.
-  int nr = 0, nruns = 0;
-  n_copies_ = 0;
-  std::array<Mask, kMaxRows> below_of;  // positions below the diagonal in each sparse column
-  const auto copy = [&](int r, int c) {  // positions r >= c
-    const unsigned i = rows_[perm_[r]], j = rows_[perm_[c]];
-    const std::uint32_t src = i >= j ? i * stride + j : j * stride + i;
-    const auto dst = static_cast<std::uint16_t>(r * w_stride_ + c);
-    if (n_copies_ > 0) {
-      Copy& last = copies_[n_copies_ - 1];
-      if (last.dst + last.count == dst && last.src + last.count == src) {
-        ++last.count;
-        return;
+    // Sparse columns as position lists (ascending) and runs, and L's rows (positions) as masks
+    // of their sparse columns (for the copies).
+    std::array<W, kMaxRows> row_cols;
+    for (int r = 0; r < n; ++r) row_cols[r] = 0;
+    int nr = 0, nruns = 0;
+    for (int c = 0; c < dense_from_; ++c) {
+      col_start_[c] = static_cast<std::uint16_t>(nr);
+      run_start_[c] = static_cast<std::uint16_t>(nruns);
+      W below = 0;  // positions
+      for (W m = column[c]; m; m &= m - 1) below |= bit(pos[low(m)]);
+      while (below) {
+        const int first = low(below), count = run_from(below, first);
+        runs_[nruns++] = Run{static_cast<std::uint8_t>(first), static_cast<std::uint8_t>(count)};
+        for (int r = first; r < first + count; ++r) {
+          col_rows_[nr++] = static_cast<std::uint8_t>(r);
+          row_cols[r] |= bit(c);
+        }
+        below &= ~span<W>(first, count);
       }
     }
-    copies_[n_copies_++] = Copy{src, dst, 1};
+    col_start_[dense_from_] = static_cast<std::uint16_t>(nr);
+    run_start_[dense_from_] = static_cast<std::uint16_t>(nruns);
+    n_supers_ = 0;
+    for (int c = 0; c < dense_from_;) {
+      int w = 1;
+      while (c + w < dense_from_) {  // does column c + w - 1 nest onto column c + w?
+        const int a = c + w - 1, b = c + w;
+        const int na = col_start_[a + 1] - col_start_[a], nb = col_start_[b + 1] - col_start_[b];
+        if (na != nb + 1 || col_rows_[col_start_[a]] != b ||
+            !std::equal(col_rows_.begin() + col_start_[a] + 1,
+                        col_rows_.begin() + col_start_[a + 1], col_rows_.begin() + col_start_[b]))
+          break;
+        ++w;
+      }
+      supers_[n_supers_++] = Supernode{static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(w)};
+      c += w;
+    }
+    // A's entries outside the factor's pattern (covers(a)), in runs consecutive in A: runs of
+    // zero bits along a row whose rows are consecutive in A (next_row), joined to the run
+    // before where they continue it.
+    W next_row = 0;  // bit j: rows_[j] == rows_[j - 1] + 1
+    for (int j = 1; j < n; ++j)
+      if (rows_[j] == rows_[j - 1] + 1) next_row |= bit(j);
+    n_zeros_ = 0;
+    std::uint32_t zeros_end = 0;  // one past the last run
+    for (int i = 0; i < n; ++i) {
+      const W outside = static_cast<W>(~filled_[i]) & before<W>(i + 1);
+      const W joined = outside & next_row;
+      for (W m = outside; m;) {
+        const int j = low(m), count = j + 1 < bits ? 1 + run_from(joined, j + 1) : 1;
+        const std::uint32_t src = rows_[i] * stride + rows_[j];
+        if (n_zeros_ > 0 && zeros_end == src)
+          zeros_[n_zeros_ - 1].count += count;
+        else
+          zeros_[n_zeros_++] = Zeros{src, static_cast<std::uint32_t>(count)};
+        zeros_end = src + count;
+        m &= ~span<W>(j, count);
+      }
+    }
+    // Copies row by row (runs along a row of both matrices), the sparse part then the tail.
+    std::array<unsigned, kMaxRows> row_at;  // A's row at each position
+    for (int p = 0; p < n; ++p) row_at[p] = rows_[perm_[p]];
+    n_copies_ = 0;
+    std::uint32_t src_end = 0, dst_end = 0;  // one past the last run
+    const auto copy = [&](unsigned i, int c, std::uint32_t dst) {  // i: row r's row in A
+      const unsigned j = row_at[c];
+      const std::uint32_t src = i >= j ? i * stride + j : j * stride + i;
+      if (n_copies_ > 0 && dst == dst_end && src == src_end)
+        ++copies_[n_copies_ - 1].count;
+      else
+        copies_[n_copies_++] = Copy{src, static_cast<std::uint16_t>(dst), 1};
+      src_end = src + 1;
+      dst_end = dst + 1;
+    };
+    for (int r = 0; r < n; ++r) {
+      const unsigned i = row_at[r];
+      const auto row_dst = static_cast<std::uint32_t>(r * w_stride_);
+      for (W m = row_cols[r]; m; m &= m - 1) copy(i, low(m), row_dst + low(m));
+      if (r < dense_from_) copy(i, r, row_dst + r);
+      for (int c = dense_from_; c <= r; ++c) copy(i, c, row_dst + c);
+    }
   };
-  for (int c = 0; c < dense_from_; ++c) {
-    col_start_[c] = static_cast<std::uint16_t>(nr);
-    run_start_[c] = static_cast<std::uint16_t>(nruns);
-    Mask below = 0;  // positions
-    for (Mask m = column[c]; m; m &= m - 1) below |= bit(pos[low(m)]);
-    below_of[c] = below;
-    for (Mask m = below; m; m &= m - 1) {
-      const int r = low(m);
-      col_rows_[nr++] = static_cast<std::uint8_t>(r);
-      if (nruns > run_start_[c] && runs_[nruns - 1].first + runs_[nruns - 1].count == r)
-        ++runs_[nruns - 1].count;
-      else
-        runs_[nruns++] = Run{static_cast<std::uint8_t>(r), 1};
-    }
-  }
-  col_start_[dense_from_] = static_cast<std::uint16_t>(nr);
-  run_start_[dense_from_] = static_cast<std::uint16_t>(nruns);
-  n_supers_ = 0;
-  for (int c = 0; c < dense_from_;) {
-    int w = 1;
-    while (c + w < dense_from_) {  // does column c + w - 1 nest onto column c + w?
-      const int a = c + w - 1, b = c + w;
-      const int na = col_start_[a + 1] - col_start_[a], nb = col_start_[b + 1] - col_start_[b];
-      if (na != nb + 1 || col_rows_[col_start_[a]] != b ||
-          !std::equal(col_rows_.begin() + col_start_[a] + 1, col_rows_.begin() + col_start_[a + 1],
-                      col_rows_.begin() + col_start_[b]))
-        break;
-      ++w;
-    }
-    supers_[n_supers_++] = Supernode{static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(w)};
-    c += w;
-  }
-  // A's entries outside the factor's pattern (covers(a)), in runs.
-  n_zeros_ = 0;
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j <= i; ++j) {
-      if (filled_[i] & bit(j)) continue;
-      const std::uint32_t src = rows_[i] * stride + rows_[j];
-      if (n_zeros_ > 0 && zeros_[n_zeros_ - 1].src + zeros_[n_zeros_ - 1].count == src)
-        ++zeros_[n_zeros_ - 1].count;
-      else
-        zeros_[n_zeros_++] = Zeros{src, 1};
-    }
-  }
-  // Copies row by row (runs along a row of both matrices), the sparse part then the tail.
-  for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < std::min(r, dense_from_); ++c)
-      if (below_of[c] >> r & 1) copy(r, c);
-    if (r < dense_from_) copy(r, r);
-    for (int c = dense_from_; c <= r; ++c) copy(r, c);
-  }
+  if (n <= 64)
+    analyse_as(std::uint64_t{0});
+  else
+    analyse_as(Mask{0});
 }
 
 namespace {
