@@ -191,6 +191,22 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     if (r < dense_from_) copy(r, r);
     for (int c = dense_from_; c <= r; ++c) copy(r, c);
   }
+
+  // ---- For SparseLdlt::factor (session 10): the copies as runs contiguous in the working
+  // matrix only, each entry with its own source (fewer, longer runs than copies_, whose runs
+  // must be contiguous in A as well).
+  n_fills_ = 0;
+  int nsrc = 0;
+  for (int g = 0; g < n_copies_; ++g) {
+    const Copy& c = copies_[g];
+    Fill* last = n_fills_ > 0 ? &fills_[n_fills_ - 1] : nullptr;
+    if (last && last->dst + last->count == c.dst) {
+      last->count = static_cast<std::uint16_t>(last->count + c.count);
+    } else {
+      fills_[n_fills_++] = Fill{static_cast<std::uint16_t>(nsrc), c.dst, c.count};
+    }
+    for (int e = 0; e < c.count; ++e) fill_src_[nsrc++] = c.src + e;
+  }
 }
 
 namespace {
@@ -245,6 +261,11 @@ bool SparseLdlt::factor_column(int k) {
 }
 
 namespace {
+// GCC's generic vectors (AVX2 registers in the AVX2 copies, SSE2 pairs in the others). Their
+// unaligned loads and stores go through memcpy (one instruction).
+typedef double V4 __attribute__((vector_size(32)));
+typedef double V2 __attribute__((vector_size(16)));
+
 // Dense LDLᵀ of a trapezoid of rows (each at its own address: a supernode's rows below it are
 // scattered): rows 0 .. width - 1 a square block with its diagonal at row[i][i], rows width ..
 // nrows - 1 below it, entries row[i][0 .. min(i, width - 1)] (the lower part; nothing else is
@@ -321,9 +342,32 @@ bool dense_ldlt(double* const* row, int nrows, int width, double* dinv, double* 
         double* ei = e + (i - width) * ke + k;
         ei[0] = t0, ei[1] = t1, ei[2] = t2, ei[3] = t3;
       }
-      const int jmax = std::min(i, width - 1);
-      for (int j = k + 4; j <= jmax; ++j)
-        ri[j] = (((ri[j] - l0 * u0[j]) - l1 * u1[j]) - l2 * u2[j]) - l3 * u3[j];
+      // The rest of the row, 4 entries at a time, then 2, then 1 (explicit vectors: no loop
+      // versioning for these short rows).
+      const int end = std::min(i, width - 1) + 1;
+      int j = k + 4;
+      for (; j + 4 <= end; j += 4) {
+        V4 r, a0, a1, a2, a3;
+        std::memcpy(&r, ri + j, sizeof r);
+        std::memcpy(&a0, u0 + j, sizeof r);
+        std::memcpy(&a1, u1 + j, sizeof r);
+        std::memcpy(&a2, u2 + j, sizeof r);
+        std::memcpy(&a3, u3 + j, sizeof r);
+        r = (((r - l0 * a0) - l1 * a1) - l2 * a2) - l3 * a3;
+        std::memcpy(ri + j, &r, sizeof r);
+      }
+      if (j + 2 <= end) {
+        V2 r, a0, a1, a2, a3;
+        std::memcpy(&r, ri + j, sizeof r);
+        std::memcpy(&a0, u0 + j, sizeof r);
+        std::memcpy(&a1, u1 + j, sizeof r);
+        std::memcpy(&a2, u2 + j, sizeof r);
+        std::memcpy(&a3, u3 + j, sizeof r);
+        r = (((r - l0 * a0) - l1 * a1) - l2 * a2) - l3 * a3;
+        std::memcpy(ri + j, &r, sizeof r);
+        j += 2;
+      }
+      if (j < end) ri[j] = (((ri[j] - l0 * u0[j]) - l1 * u1[j]) - l2 * u2[j]) - l3 * u3[j];
     }
   }
   return true;
@@ -359,18 +403,25 @@ bool SparseLdlt::factor_supernode(int k0, int width) {
   return true;
 }
 
+// The entries of the factor's pattern from A into the working matrix w (LdltPlan::fills_), two
+// at a time (one store).
+void SparseLdlt::fill(const LdltPlan& plan, const double* __restrict a, double* __restrict w) {
+  for (int g = 0; g < plan.n_fills_; ++g) {
+    const LdltPlan::Fill& f = plan.fills_[g];
+    const std::uint32_t* __restrict src = plan.fill_src_.data() + f.first;
+    double* __restrict dst = w + f.dst;
+    int e = 0;
+    for (; e + 2 <= f.count; e += 2)  // (SSE2 by hand: GCC's vectorised form costs more)
+      _mm_storeu_pd(dst + e, _mm_loadh_pd(_mm_load_sd(a + src[e]), a + src[e + 1]));
+    if (e < f.count) dst[e] = a[src[e]];
+  }
+}
+
 bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   plan_ = &plan;
   double* w = w_.data();
   const int s = plan.w_stride_, n = plan.n_, df = plan.dense_from_;
-  for (int g = 0; g < plan.n_copies_; ++g) {  // two at a time (the runs are short: no memcpy)
-    const LdltPlan::Copy& c = plan.copies_[g];
-    const double* src = a + c.src;
-    double* dst = w + c.dst;
-    int e = 0;
-    for (; e + 2 <= c.count; e += 2) _mm_storeu_pd(dst + e, _mm_loadu_pd(src + e));
-    if (e < c.count) dst[e] = src[e];
-  }
+  fill(plan, a, w);
   // Right-looking from supernode to supernode (lone columns one by one), then the dense tail.
   for (int sn = 0; sn < plan.n_supers_; ++sn) {
     const int k = plan.supers_[sn].first;
