@@ -225,6 +225,47 @@ inline double sum4(int n, Term term) {
   for (; i < n; ++i) s0 += term(i);
   return (s0 + s1) + (s2 + s3);
 }
+
+// GCC's generic vectors (AVX2 registers in the AVX2 copies, SSE2 pairs in the others). Their
+// unaligned loads and stores go through memcpy (one instruction).
+typedef double V4 __attribute__((vector_size(32)));
+typedef double V2 __attribute__((vector_size(16)));
+
+// sum4 of a[i] b[i] with explicit vectors (the 4 partial sums one vector: the same bits).
+inline double dot(const double* a, const double* b, int n) {
+  V4 acc = {0.0, 0.0, 0.0, 0.0};
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    V4 va, vb;
+    std::memcpy(&va, a + i, sizeof va);
+    std::memcpy(&vb, b + i, sizeof vb);
+    acc += va * vb;
+  }
+  double s0 = acc[0];
+  for (; i < n; ++i) s0 += a[i] * b[i];
+  return (s0 + acc[1]) + (acc[2] + acc[3]);
+}
+
+// y[i] -= l[i] c for i < n: 4, then 2, then 1 at a time (short rows: no loop versioning).
+inline void sub_scaled(double* y, const double* l, double c, int n) {
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    V4 vy, vl;
+    std::memcpy(&vy, y + i, sizeof vy);
+    std::memcpy(&vl, l + i, sizeof vl);
+    vy -= vl * c;
+    std::memcpy(y + i, &vy, sizeof vy);
+  }
+  if (i + 2 <= n) {
+    V2 vy, vl;
+    std::memcpy(&vy, y + i, sizeof vy);
+    std::memcpy(&vl, l + i, sizeof vl);
+    vy -= vl * c;
+    std::memcpy(y + i, &vy, sizeof vy);
+    i += 2;
+  }
+  if (i < n) y[i] -= l[i] * c;
+}
 }  // namespace
 
 // Column k alone (pivot d_k): updates the rows and columns of its pattern only, run by run (u
@@ -261,11 +302,6 @@ bool SparseLdlt::factor_column(int k) {
 }
 
 namespace {
-// GCC's generic vectors (AVX2 registers in the AVX2 copies, SSE2 pairs in the others). Their
-// unaligned loads and stores go through memcpy (one instruction).
-typedef double V4 __attribute__((vector_size(32)));
-typedef double V2 __attribute__((vector_size(16)));
-
 // Dense LDLᵀ of a trapezoid of rows (each at its own address: a supernode's rows below it are
 // scattered): rows 0 .. width - 1 a square block with its diagonal at row[i][i], rows width ..
 // nrows - 1 below it, entries row[i][0 .. min(i, width - 1)] (the lower part; nothing else is
@@ -474,7 +510,7 @@ void SparseLdlt::solve(double* x) const {
       const double yc = c == k0 ? y[k0] : z[c - k0 - 1];
       const double* l = lc + cs[c];
       double* zc = z + (c - k0);
-      for (int e = 0; e < len - (c - k0); ++e) zc[e] -= l[e] * yc;
+      sub_scaled(zc, l, yc, len - (c - k0));
     }
     for (int i = 0; i < nb; ++i) y[k0 + 1 + i] = z[i];
     for (int i = nb; i < len; ++i) y[cr[cs[k1] + i - nb]] = z[i];
@@ -482,14 +518,14 @@ void SparseLdlt::solve(double* x) const {
   for (int i = df + 1; i < n; ++i) {
     const double* wi = w + i * s + df;
     const double* yd = y + df;
-    y[i] -= sum4(i - df, [&](int k) { return wi[k] * yd[k]; });
+    y[i] -= dot(wi, yd, i - df);
   }
   for (int k = 0; k < n; ++k) y[k] *= dinv_[k];
   // Lᵀ x = z: the dense tail by rows (bottom up), then the sparse columns.
   for (int i = n - 1; i > df; --i) {
     const double* wi = w + i * s;
     const double yi = y[i];
-    for (int k = df; k < i; ++k) y[k] -= wi[k] * yi;
+    sub_scaled(y + df, wi + df, yi, i - df);
   }
   for (int sn = plan.n_supers_ - 1; sn >= 0; --sn) {
     const int k0 = plan.supers_[sn].first, k1 = k0 + plan.supers_[sn].width - 1;
@@ -502,7 +538,7 @@ void SparseLdlt::solve(double* x) const {
     for (int c = k1; c >= k0; --c) {
       const double* l = lc + cs[c];
       const double* zc = z + (c - k0);
-      const double yc = y[c] - sum4(len - (c - k0), [&](int e) { return l[e] * zc[e]; });
+      const double yc = y[c] - dot(l, zc, len - (c - k0));
       y[c] = yc;
       if (c > k0) z[c - k0 - 1] = yc;
     }
