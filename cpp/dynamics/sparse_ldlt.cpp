@@ -268,35 +268,26 @@ inline void sub_scaled(double* y, const double* l, double c, int n) {
 }
 }  // namespace
 
-// Column k alone (pivot d_k): updates the rows and columns of its pattern only, run by run (u
-// holds column k by position), right-looking.
+// Column k alone (pivot d_k): updates the entries of its pattern only, entry by entry (the lone
+// columns are short: 1 to 9 rows), right-looking.
 bool SparseLdlt::factor_column(int k) {
   const LdltPlan& plan = *plan_;
   double* w = w_.data();
   const int s = plan.w_stride_;
-  alignas(16) double u[LdltPlan::kMaxRows];
   const double d = w[k * s + k];
   if (!(d > 0.0) || !std::isfinite(d)) return false;
   const double inv = 1.0 / d;
   dinv_[k] = inv;
-  const int q0 = plan.col_start_[k], q1 = plan.col_start_[k + 1];
-  const LdltPlan::Run* runs = plan.runs_.data() + plan.run_start_[k];
-  const int nruns = plan.run_start_[k + 1] - plan.run_start_[k];
-  for (int q = q0; q < q1; ++q) u[plan.col_rows_[q]] = w[plan.col_rows_[q] * s + k];
-  for (int q = q0; q < q1; ++q) {
-    const int r = plan.col_rows_[q];
-    double* wr = w + r * s;
-    const double l = u[r] * inv;
-    const __m128d lv = _mm_set1_pd(l);
-    for (int g = 0; g < nruns && runs[g].first <= r; ++g) {
-      const int end = std::min(runs[g].first + runs[g].count, r + 1);
-      int j = runs[g].first;
-      for (; j + 2 <= end; j += 2)  // (as the scalar form: a product, then a difference)
-        _mm_storeu_pd(wr + j, _mm_sub_pd(_mm_loadu_pd(wr + j), _mm_mul_pd(lv, _mm_loadu_pd(u + j))));
-      if (j < end) wr[j] -= l * u[j];
-    }
+  const int q0 = plan.col_start_[k], m = plan.col_start_[k + 1] - q0;
+  const std::uint8_t* rows = plan.col_rows_.data() + q0;
+  double t[LdltPlan::kMaxRows];  // column k (d_k L_rk), by place in the column
+  for (int a = 0; a < m; ++a) t[a] = w[rows[a] * s + k];
+  for (int a = 0; a < m; ++a) {
+    double* wr = w + rows[a] * s;
+    const double l = t[a] * inv;
+    for (int b = 0; b <= a; ++b) wr[rows[b]] -= l * t[b];
     wr[k] = l;
-    lcol_[q] = l;
+    lcol_[q0 + a] = l;
   }
   return true;
 }
