@@ -317,19 +317,29 @@ bool dense_ldlt(double* const* row, int nrows, int width, double* dinv, double* 
       lcb[c] = lc + (j * nrows - j * (j + 1) / 2 - j - 1);
     }
     // The block's own rows: their entries left of the diagonal, then the pivot.
-    for (int i = k; i < k + kb; ++i) {
+    for (int i = k; i < k + kb; ++i) {  // (unrolled: row i has i - k entries left of its pivot)
       double* __restrict ri = row[i];
-      double l[4];
-      for (int c = k; c < i; ++c) {
-        double t = ri[c];
-        for (int p = k; p < c; ++p) t -= l[p - k] * u[p - k][c];
-        u[c - k][i] = t;
-        l[c - k] = t * dinv[c];
-        ri[c] = l[c - k];
-        if (lc != nullptr) lcb[c - k][i] = l[c - k];
+      double d = ri[i], l0 = 0.0, l1 = 0.0;
+      if (i > k) {
+        const double t0 = ri[k];
+        l0 = t0 * dinv[k];
+        u[0][i] = t0, ri[k] = l0;
+        d -= l0 * t0;
       }
-      double d = ri[i];
-      for (int p = k; p < i; ++p) d -= l[p - k] * u[p - k][i];
+      if (i > k + 1) {
+        const double t1 = ri[k + 1] - l0 * u[0][k + 1];
+        l1 = t1 * dinv[k + 1];
+        u[1][i] = t1, ri[k + 1] = l1;
+        d -= l1 * t1;
+      }
+      if (i > k + 2) {
+        const double t2 = (ri[k + 2] - l0 * u[0][k + 2]) - l1 * u[1][k + 2];
+        const double l2 = t2 * dinv[k + 2];
+        u[2][i] = t2, ri[k + 2] = l2;
+        d -= l2 * t2;
+      }
+      if (lc != nullptr)
+        for (int c = k; c < i; ++c) lcb[c - k][i] = ri[c];
       const double inv = 1.0 / d;
       if (!(inv > 0.0) || !std::isfinite(inv)) return false;
       dinv[i] = inv;
