@@ -413,8 +413,9 @@ bool dense_ldlt(double* const* row, int nrows, int width, double* dinv, double* 
 
 // Columns k0 .. k0 + width - 1 whose patterns nest share the rows R below them: the block and
 // R factorised as one dense trapezoid (dense_ldlt: L, also into lcol_ for the solves, and
-// d_c L_rc of R into e_), then R x R
-// updated once, entry by entry with dot products over the block's columns.
+// d_c L_rc of R into e_), then R x R updated once, entry by entry with dot products over the
+// block's columns. Also compiled for AVX2 (those dot products 4 wide; the same bits).
+ERNEST_ALSO_AVX2
 bool SparseLdlt::factor_supernode(int k0, int width) {
   const LdltPlan& plan = *plan_;
   double* w = w_.data();
