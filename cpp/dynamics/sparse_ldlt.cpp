@@ -246,6 +246,20 @@ inline double dot(const double* a, const double* b, int n) {
   return (s0 + acc[1]) + (acc[2] + acc[3]);
 }
 
+// r[0 .. size of V) -= l[0] u0 + l[1] u1 + l[2] u2 + l[3] u3, term by term (V: 2 or 4 doubles).
+template <class V>
+inline void sub_columns(double* r, const double* u0, const double* u1, const double* u2,
+                        const double* u3, const double* l) {
+  V vr, a0, a1, a2, a3;
+  std::memcpy(&vr, r, sizeof vr);
+  std::memcpy(&a0, u0, sizeof vr);
+  std::memcpy(&a1, u1, sizeof vr);
+  std::memcpy(&a2, u2, sizeof vr);
+  std::memcpy(&a3, u3, sizeof vr);
+  vr = (((vr - l[0] * a0) - l[1] * a1) - l[2] * a2) - l[3] * a3;
+  std::memcpy(r, &vr, sizeof vr);
+}
+
 // y[i] -= l[i] c for i < n: 4, then 2, then 1 at a time (short rows: no loop versioning).
 inline void sub_scaled(double* y, const double* l, double c, int n) {
   int i = 0;
@@ -372,6 +386,7 @@ bool dense_ldlt(double* const* row, int nrows, int width, double* dinv, double* 
       const double l2 = t2 * dinv[k + 2];
       const double t3 = ((ri[k + 3] - l0 * u0[k + 3]) - l1 * u1[k + 3]) - l2 * u2[k + 3];
       const double l3 = t3 * dinv[k + 3];
+      const double l[4] = {l0, l1, l2, l3};
       u[0][i] = t0, u[1][i] = t1, u[2][i] = t2, u[3][i] = t3;
       ri[k] = l0, ri[k + 1] = l1, ri[k + 2] = l2, ri[k + 3] = l3;
       if (lc0 != nullptr) lc0[i] = l0, lc1[i] = l1, lc2[i] = l2, lc3[i] = l3;
@@ -383,27 +398,8 @@ bool dense_ldlt(double* const* row, int nrows, int width, double* dinv, double* 
       // versioning for these short rows).
       const int end = std::min(i, width - 1) + 1;
       int j = k + 4;
-      for (; j + 4 <= end; j += 4) {
-        V4 r, a0, a1, a2, a3;
-        std::memcpy(&r, ri + j, sizeof r);
-        std::memcpy(&a0, u0 + j, sizeof r);
-        std::memcpy(&a1, u1 + j, sizeof r);
-        std::memcpy(&a2, u2 + j, sizeof r);
-        std::memcpy(&a3, u3 + j, sizeof r);
-        r = (((r - l0 * a0) - l1 * a1) - l2 * a2) - l3 * a3;
-        std::memcpy(ri + j, &r, sizeof r);
-      }
-      if (j + 2 <= end) {
-        V2 r, a0, a1, a2, a3;
-        std::memcpy(&r, ri + j, sizeof r);
-        std::memcpy(&a0, u0 + j, sizeof r);
-        std::memcpy(&a1, u1 + j, sizeof r);
-        std::memcpy(&a2, u2 + j, sizeof r);
-        std::memcpy(&a3, u3 + j, sizeof r);
-        r = (((r - l0 * a0) - l1 * a1) - l2 * a2) - l3 * a3;
-        std::memcpy(ri + j, &r, sizeof r);
-        j += 2;
-      }
+      for (; j + 4 <= end; j += 4) sub_columns<V4>(ri + j, u0 + j, u1 + j, u2 + j, u3 + j, l);
+      if (j + 2 <= end) sub_columns<V2>(ri + j, u0 + j, u1 + j, u2 + j, u3 + j, l), j += 2;
       if (j < end) ri[j] = (((ri[j] - l0 * u0[j]) - l1 * u1[j]) - l2 * u2[j]) - l3 * u3[j];
     }
   }
