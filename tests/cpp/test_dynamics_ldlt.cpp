@@ -12,18 +12,14 @@
 #include <vector>
 
 #include "ernest/dynamics/sparse_ldlt.hpp"
+#include "lcp_matrix.hpp"
 
 using namespace ernest::dynamics;
 using Mask = LdltPlan::Mask;
 
 namespace {
 
-// A matrix as ODE stores it (lower triangle, row-major, stride dPAD(n), junk above) and densely.
-struct System {
-  int n = 0, stride = 0;
-  std::vector<double> a;
-  Eigen::MatrixXd dense;
-};
+using System = ernest::testing::LcpMatrix;
 
 // A random symmetric positive definite matrix with the lower-triangle pattern `pattern` (bit j of
 // row i: entry (i, j), diagonal included), diagonally dominant then scaled by a random diagonal
