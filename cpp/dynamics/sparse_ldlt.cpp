@@ -1,13 +1,9 @@
-// Sparse LDLᵀ (sparse_ldlt.hpp): minimum-degree order on bit masks, right-looking elimination of
-// the sparse columns (supernodes with ODE's dense kernels), ODE's dense LDLᵀ for the trailing
-// clique.
+// Sparse LDLᵀ (sparse_ldlt.hpp), the plan: minimum-degree order on bit masks, the factor's
+// pattern, its supernodes and the lists the numeric part (sparse_ldlt_numeric.cpp) walks.
 #include "ernest/dynamics/sparse_ldlt.hpp"
 
-#include <emmintrin.h>
-#include <ode/ode.h>
-
 #include <algorithm>
-#include <cmath>
+#include <cstring>
 
 #include "ernest/common/vector_math.hpp"
 
@@ -18,8 +14,6 @@ using Mask = LdltPlan::Mask;
 inline Mask bit(int i) { return Mask{1} << i; }
 inline int pop(Mask m) { return mask_count(m); }
 inline int low(Mask m) { return mask_low(m); }
-// Supernodes at least this wide are factorised with dense kernels (factor_supernode).
-constexpr int kDenseSupernode = 4;
 }  // namespace
 
 bool LdltPlan::same_rows(const unsigned* rows, int n, int stride) const {
@@ -29,18 +23,36 @@ bool LdltPlan::same_rows(const unsigned* rows, int n, int stride) const {
   return true;
 }
 
+// Also compiled for AVX2 (common/vector_math.hpp): 4 entries per comparison (GCC's generic
+// vectors; two SSE2 halves in the baseline copy).
+ERNEST_ALSO_AVX2
 bool LdltPlan::covers(const double* a) const {
-  const __m128d zero = _mm_setzero_pd();
-  __m128d nonzero = zero;
+  typedef double V4 __attribute__((vector_size(32)));
+  typedef long long M4 __attribute__((vector_size(32)));
+  typedef double V2 __attribute__((vector_size(16)));
+  typedef long long M2 __attribute__((vector_size(16)));
+  M4 nonzero4 = {0, 0, 0, 0};
+  M2 nonzero2 = {0, 0};
+  bool nonzero1 = false;
   for (int g = 0; g < n_zeros_; ++g) {
     const double* p = a + zeros_[g].src;
     const int count = static_cast<int>(zeros_[g].count);
     int e = 0;
-    for (; e + 2 <= count; e += 2)
-      nonzero = _mm_or_pd(nonzero, _mm_cmpneq_pd(_mm_loadu_pd(p + e), zero));
-    if (e < count) nonzero = _mm_or_pd(nonzero, _mm_cmpneq_sd(_mm_load_sd(p + e), zero));
+    for (; e + 4 <= count; e += 4) {  // (a NaN compares non-zero: not covered)
+      V4 v;
+      std::memcpy(&v, p + e, sizeof v);
+      nonzero4 |= v != 0.0;
+    }
+    if (e + 2 <= count) {
+      V2 v;
+      std::memcpy(&v, p + e, sizeof v);
+      nonzero2 |= v != 0.0;
+      e += 2;
+    }
+    if (e < count) nonzero1 |= p[e] != 0.0;
   }
-  return _mm_movemask_pd(nonzero) == 0;
+  return !nonzero1 && !(nonzero2[0] | nonzero2[1]) &&
+         !(nonzero4[0] | nonzero4[1] | nonzero4[2] | nonzero4[3]);
 }
 
 bool LdltPlan::covers(const Mask* pattern) const {
@@ -231,159 +243,22 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     analyse_as(std::uint64_t{0});
   else
     analyse_as(Mask{0});
-}
 
-namespace {
-// Sum of the products of n pairs in four interleaved partial sums: a single running sum would
-// wait a full add latency per term (the fixed order keeps results bit-repeatable).
-template <class Term>
-inline double sum4(int n, Term term) {
-  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-  int i = 0;
-  for (; i + 4 <= n; i += 4) {
-    s0 += term(i);
-    s1 += term(i + 1);
-    s2 += term(i + 2);
-    s3 += term(i + 3);
-  }
-  for (; i < n; ++i) s0 += term(i);
-  return (s0 + s1) + (s2 + s3);
-}
-}  // namespace
-
-// Column k alone (pivot d_k): updates the rows and columns of its pattern only, run by run (u
-// holds column k by position), right-looking.
-bool SparseLdlt::factor_column(int k) {
-  const LdltPlan& plan = *plan_;
-  double* w = w_.data();
-  const int s = plan.w_stride_;
-  alignas(16) double u[LdltPlan::kMaxRows];
-  const double d = w[k * s + k];
-  if (!(d > 0.0) || !std::isfinite(d)) return false;
-  const double inv = 1.0 / d;
-  dinv_[k] = inv;
-  const int q0 = plan.col_start_[k], q1 = plan.col_start_[k + 1];
-  const LdltPlan::Run* runs = plan.runs_.data() + plan.run_start_[k];
-  const int nruns = plan.run_start_[k + 1] - plan.run_start_[k];
-  for (int q = q0; q < q1; ++q) u[plan.col_rows_[q]] = w[plan.col_rows_[q] * s + k];
-  for (int q = q0; q < q1; ++q) {
-    const int r = plan.col_rows_[q];
-    double* wr = w + r * s;
-    const double l = u[r] * inv;
-    const __m128d lv = _mm_set1_pd(l);
-    for (int g = 0; g < nruns && runs[g].first <= r; ++g) {
-      const int end = std::min(runs[g].first + runs[g].count, r + 1);
-      int j = runs[g].first;
-      for (; j + 2 <= end; j += 2)  // (as the scalar form: a product, then a difference)
-        _mm_storeu_pd(wr + j, _mm_sub_pd(_mm_loadu_pd(wr + j), _mm_mul_pd(lv, _mm_loadu_pd(u + j))));
-      if (j < end) wr[j] -= l * u[j];
+  // ---- For SparseLdlt::factor (session 10): the copies as runs contiguous in the working
+  // matrix only, each entry with its own source (fewer, longer runs than copies_, whose runs
+  // must be contiguous in A as well).
+  n_fills_ = 0;
+  int nsrc = 0;
+  for (int g = 0; g < n_copies_; ++g) {
+    const Copy& c = copies_[g];
+    Fill* last = n_fills_ > 0 ? &fills_[n_fills_ - 1] : nullptr;
+    if (last && last->dst + last->count == c.dst) {
+      last->count = static_cast<std::uint16_t>(last->count + c.count);
+    } else {
+      fills_[n_fills_++] = Fill{static_cast<std::uint16_t>(nsrc), c.dst, c.count};
     }
-    wr[k] = l;
-    lcol_[q] = l;
+    for (int e = 0; e < c.count; ++e) fill_src_[nsrc++] = c.src + e;
   }
-  return true;
-}
-
-// Columns k0 .. k0 + width - 1 whose patterns nest share the rows R below them: their diagonal
-// block is factorised densely (ODE's dFactorLDLT), each row of R solved against it (dSolveL1:
-// d_c L_rc), and R x R updated once, entry by entry with dot products over the block's columns.
-bool SparseLdlt::factor_supernode(int k0, int width) {
-  const LdltPlan& plan = *plan_;
-  double* w = w_.data();
-  const int s = plan.w_stride_, k1 = k0 + width - 1;
-  constexpr int ke = LdltPlan::kMaxRows;
-  double* block = w + k0 * s + k0;
-  dFactorLDLT(block, dinv_.data() + k0, width, s);
-  for (int c = k0; c <= k1; ++c)
-    if (!(dinv_[c] > 0.0) || !std::isfinite(dinv_[c])) return false;
-  const std::uint8_t* below = plan.col_rows_.data() + plan.col_start_[k1];
-  const int m = plan.col_start_[k1 + 1] - plan.col_start_[k1];
-  double* e = e_.data();
-  for (int a = 0; a < m; ++a) {
-    double* seg = w + below[a] * s + k0;
-    dSolveL1(block, seg, width, s);
-    double* ea = e + a * ke;
-    for (int c = 0; c < width; ++c) {
-      ea[c] = seg[c];
-      seg[c] *= dinv_[k0 + c];
-    }
-  }
-  for (int a = 0; a < m; ++a) {
-    double* wr = w + below[a] * s;
-    const double* la = wr + k0;
-    for (int b = 0; b <= a; ++b) {
-      const double* eb = e + b * ke;
-      wr[below[b]] -= sum4(width, [&](int c) { return la[c] * eb[c]; });
-    }
-  }
-  for (int c = k0; c <= k1; ++c)  // the columns as the solves read them
-    for (int q = plan.col_start_[c]; q < plan.col_start_[c + 1]; ++q)
-      lcol_[q] = w[plan.col_rows_[q] * s + c];
-  return true;
-}
-
-bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
-  plan_ = &plan;
-  double* w = w_.data();
-  const int s = plan.w_stride_, n = plan.n_, df = plan.dense_from_;
-  for (int g = 0; g < plan.n_copies_; ++g) {  // two at a time (the runs are short: no memcpy)
-    const LdltPlan::Copy& c = plan.copies_[g];
-    const double* src = a + c.src;
-    double* dst = w + c.dst;
-    int e = 0;
-    for (; e + 2 <= c.count; e += 2) _mm_storeu_pd(dst + e, _mm_loadu_pd(src + e));
-    if (e < c.count) dst[e] = src[e];
-  }
-  // Right-looking from supernode to supernode (lone columns one by one), then the dense tail.
-  for (int sn = 0; sn < plan.n_supers_; ++sn) {
-    const int k = plan.supers_[sn].first;
-    if (plan.supers_[sn].width >= kDenseSupernode) {
-      if (!factor_supernode(k, plan.supers_[sn].width)) return false;
-      continue;
-    }
-    for (int kk = k; kk < k + plan.supers_[sn].width; ++kk)
-      if (!factor_column(kk)) return false;
-  }
-  if (df < n) {
-    dFactorLDLT(w + df * s + df, dinv_.data() + df, n - df, s);
-    for (int k = df; k < n; ++k)
-      if (!(dinv_[k] > 0.0) || !std::isfinite(dinv_[k])) return false;
-  }
-  return true;
-}
-
-// Also compiled for AVX2 (common/vector_math.hpp; the same bits).
-ERNEST_ALSO_AVX2
-void SparseLdlt::solve(double* x) const {
-  const LdltPlan& plan = *plan_;
-  const double* __restrict w = w_.data();
-  const double* __restrict lc = lcol_.data();
-  const std::uint8_t* __restrict cr = plan.col_rows_.data();
-  const int s = plan.w_stride_, n = plan.n_, df = plan.dense_from_;
-  double* __restrict y = y_.data();
-  for (int p = 0; p < n; ++p) y[p] = x[plan.perm_[p]];
-  // L z = x: sparse columns, then the dense tail by rows.
-  for (int k = 0; k < df; ++k) {
-    const double yk = y[k];
-    for (int q = plan.col_start_[k]; q < plan.col_start_[k + 1]; ++q) y[cr[q]] -= lc[q] * yk;
-  }
-  for (int i = df + 1; i < n; ++i) {
-    const double* wi = w + i * s + df;
-    const double* yd = y + df;
-    y[i] -= sum4(i - df, [&](int k) { return wi[k] * yd[k]; });
-  }
-  for (int k = 0; k < n; ++k) y[k] *= dinv_[k];
-  // Lᵀ x = z: the dense tail by rows (bottom up), then the sparse columns.
-  for (int i = n - 1; i > df; --i) {
-    const double* wi = w + i * s;
-    const double yi = y[i];
-    for (int k = df; k < i; ++k) y[k] -= wi[k] * yi;
-  }
-  for (int k = df - 1; k >= 0; --k) {
-    const int q0 = plan.col_start_[k];
-    y[k] -= sum4(plan.col_start_[k + 1] - q0, [&](int q) { return lc[q0 + q] * y[cr[q0 + q]]; });
-  }
-  for (int p = 0; p < n; ++p) x[plan.perm_[p]] = y[p];
 }
 
 }  // namespace ernest::dynamics

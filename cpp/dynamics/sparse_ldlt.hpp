@@ -77,6 +77,14 @@ class LdltPlan {
   };
   int n_zeros_ = 0;
   std::array<Zeros, kMaxRows * (kMaxRows + 1) / 2> zeros_{};
+  // The same entries as copies_ in runs contiguous in the working matrix only, each entry's
+  // source in fill_src_ (from first on): what SparseLdlt::factor copies.
+  struct Fill {
+    std::uint16_t first, dst, count;
+  };
+  int n_fills_ = 0;
+  std::array<Fill, kMaxRows * (kMaxRows + 1) / 2> fills_{};
+  std::array<std::uint32_t, kMaxRows * (kMaxRows + 1) / 2> fill_src_{};
 };
 
 /// Rows in a row set; the lowest and the highest row of a non-empty one.
@@ -105,6 +113,7 @@ class SparseLdlt {
  private:
   bool factor_column(int k);
   bool factor_supernode(int k0, int width);
+  static void fill(const LdltPlan& plan, const double* a, double* w);
   const LdltPlan* plan_ = nullptr;
   alignas(64) std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> w_{};  // L, row-major
   std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows / 2> lcol_{};  // sparse columns of L

@@ -14,6 +14,7 @@
 
 #include "ernest/dynamics/ode_lcp.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
+#include "lcp_matrix.hpp"
 #include "snapshot_gap.hpp"
 #include "ernest/dynamics/sparse_ldlt.hpp"
 
@@ -25,11 +26,7 @@ namespace {
 // J M⁻¹ Jᵀ + CFM of a random tree of bodies, as ODE builds it: each row acts on one body or on a
 // body and its parent, so rows meet only through a shared body and every other entry is an
 // exact zero. Stored as ODE stores A: lower triangle, row-major, stride dPAD(n).
-struct TreeSystem {
-  int n = 0, stride = 0;
-  std::vector<double> a;
-  Eigen::MatrixXd dense;
-};
+using TreeSystem = ernest::testing::LcpMatrix;
 
 TreeSystem tree_system(int bodies, int rows, std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
