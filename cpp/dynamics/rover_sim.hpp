@@ -237,6 +237,13 @@ struct Snapshot {
   /// The largest growth rate of a wheel's slip estimated in the last step [1/s]; it decides the
   /// next obstacle step's substeps when SimOptions::obstacle_substeps is 1 (obstacle_contacts.cpp).
   double slip_rate = 0.0;
+  /// The implicit slip's first guesses (cpp/dynamics/rover_step.cpp): per wheel the soil rows'
+  /// levels of the two steps before the last (shear_x, compaction), the steps it has been on soil
+  /// without a break (0-3), and its last accepted slip minus eq 12's at that step's start (NaN:
+  /// none).
+  std::array<std::array<double, 4>, 2> shear_x_past{}, compaction_past{};
+  std::array<int, 4> soil_steps{};
+  std::array<double, 4> slip_offset{};
   /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
   /// of the steps that follow; internal layout, see cpp/dynamics/ode_lcp.hpp).
   std::vector<std::uint64_t> solver_patterns;

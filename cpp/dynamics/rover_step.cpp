@@ -188,6 +188,62 @@ void RoverSim::Impl::prepare_ground() {
   }
 }
 
+// First guesses of the implicit slip's fixed point (step_once()), so that most steps are accepted
+// after one solve (benchmarks/RESULTS.md, "Session 10: slip warm start"). Most of the extra solves
+// on obstacles were not for the slip but for the soil rows' levels (shear_x, compaction) the
+// explicit terms are evaluated at: the slip agreed with eq 12 to 1e-4 while a level moved by a
+// few tenths of a newton from its last step's value, or flipped sign every step where a stalled
+// wheel's v_x alternates in sign. So each level starts from whichever of three predictions from
+// the last three steps (the last level, its linear extrapolation, the level two steps back)
+// would have predicted the last step best. Only a guess: the loop accepts a step when its levels
+// and slips agree with the solve's within SimOptions::slip_force_tolerance, as before.
+void RoverSim::Impl::warm_start_levels() {
+  if (opt.ground != GroundType::Soil) return;
+  const auto predict = [](int steps, double l1, double l2, double l3) {
+    if (steps < 3) return l1;  // the wheel has not been on soil for three steps: the last level
+    const double constant = std::abs(l1 - l2), linear = std::abs(l1 - (2.0 * l2 - l3)),
+                 period2 = std::abs(l1 - l3);
+    if (constant <= linear && constant <= period2) return l1;
+    return linear <= period2 ? 2.0 * l1 - l2 : l2;
+  };
+  for (int i = 0; i < 4; ++i) {
+    shear_x[i] = clamp_unit(predict(soil_steps[i], shear_x[i], shear_x_past[0][i], shear_x_past[1][i]));
+    compaction[i] = predict(soil_steps[i], compaction[i], compaction_past[0][i], compaction_past[1][i]);
+  }
+}
+
+// The slips' first guess: eq 12 at the start of the step (prepare_ground) plus what the last
+// step's accepted slip added to its own start value, where the wheel stayed on soil and the
+// difference exceeds kSlipTolerance (below it, eq 12's value serves: a guess off by less costs
+// no solve, an extra soil split per wheel would). The soil terms are set at the guess.
+void RoverSim::Impl::warm_start_slips(Eigen::Vector4d& sigma) {
+  for (int i = 0; i < 4; ++i) {
+    if (!ground[i].active || !std::isfinite(slip_offset[i])) continue;
+    const double guess = std::clamp(sigma[i] + slip_offset[i], -1.0, 1.0);
+    if (!(std::abs(guess - sigma[i]) > kSlipTolerance)) continue;
+    sigma[i] = guess;
+    soil_terms(i, guess);
+  }
+}
+
+// After a step on soil: the history warm_start_levels / warm_start_slips read (start_x, start_c:
+// the levels at the start of the step, before the prediction).
+void RoverSim::Impl::record_warm_start(const std::array<double, 4>& start_x,
+                                       const std::array<double, 4>& start_c,
+                                       const Eigen::Vector4d& sigma,
+                                       const Eigen::Vector4d& start_sigma,
+                                       const std::array<bool, 4>& driving) {
+  for (int i = 0; i < 4; ++i) {
+    const bool on = ground[i].active;
+    soil_steps[i] = on ? std::min(soil_steps[i] + 1, 3) : 0;
+    shear_x_past[1][i] = shear_x_past[0][i];
+    shear_x_past[0][i] = start_x[i];
+    compaction_past[1][i] = compaction_past[0][i];
+    compaction_past[0][i] = start_c[i];
+    slip_offset[i] = on && !driving[i] ? sigma[i] - start_sigma[i] : std::nan("");
+  }
+}
+
 // Bekker–Wong (eqs 12–32) at slip s for wheel i, split into what ODE integrates implicitly and
 // the rest:
 // (a) the shear, whose regularisation tau -> sign(-v_c) min(|v_c|/eps_contact, 1) tau (eqs
@@ -330,6 +386,8 @@ void RoverSim::Impl::step_once() {
   base_force.fill(Vec3::Zero());
   base_torque.fill(Vec3::Zero());
   prepare_actuators(psi, phi);
+  const std::array<double, 4> start_x = shear_x, start_c = compaction;
+  warm_start_levels();
   prepare_ground();
   if (opt.ground == GroundType::Rigid) prepare_rigid();
   if (!obstacles_collected) prepare_obstacles();
@@ -365,8 +423,9 @@ void RoverSim::Impl::step_once() {
   // solve (a fixed point alongside the slip) and their change counts in the same force gap.
   // The wheels share the chassis, so the residual r(sigma) = s_end - sigma
   // couples them: Broyden's method on the four slips from J = -I (the first update is the
-  // fixed-point step, eq 12 at the end), clamped to [-1, 1]. After kMaxSlipSolves solves the
-  // step is solved once more at the best slips seen.
+  // fixed-point step, eq 12 at the end), clamped to [-1, 1], from the first guesses of
+  // warm_start_levels / warm_start_slips. After kMaxSlipSolves solves the step is solved once
+  // more at the best slips seen.
   // Backward Euler is right where the slip damps the motion (the stalled wheel above: a larger
   // slip gives a smaller end slip), not where it drives it. A wheel spinning against an obstacle
   // face on soil stands at v_x ~ 0, where eq 12's factor (1 - exp(-eps v_x^2)) makes the slip, and
@@ -382,9 +441,10 @@ void RoverSim::Impl::step_once() {
   const bool soft = opt.ground == GroundType::Soil;
   Eigen::Vector4d sigma, res = Eigen::Vector4d::Zero();
   for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
+  const Eigen::Vector4d start_sigma = sigma;  // eq 12 at the start: a driving wheel's slip
+  if (soft) warm_start_slips(sigma);
   Eigen::Vector4d best_sigma = sigma, prev_sigma = sigma, prev_res = res;
   Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
-  const Eigen::Vector4d start_sigma = sigma;
   Eigen::Vector4d last_sigma = sigma, last_end = sigma;  // each wheel's last solve: sigma, s_end
   std::array<bool, 4> driving{};  // explicit slip: the slip drives this wheel's motion
   double rate = 0.0;  // the largest secant over h: slip_rate (see step() in obstacle_contacts.cpp)
@@ -457,6 +517,7 @@ void RoverSim::Impl::step_once() {
       sigma[i] = ground[i].active && !driving[i] ? std::clamp(sigma[i] + step[i], -1.0, 1.0)
                                                 : sigma[i];
   }
+  if (soft) record_warm_start(start_x, start_c, sigma, start_sigma, driving);
   if (driving[0] || driving[1] || driving[2] || driving[3]) ++stats.slip_driving;
   slip_rate = rate;
   if (opt.ground == GroundType::Rigid) commit_rigid();
