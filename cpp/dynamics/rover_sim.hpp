@@ -91,6 +91,12 @@ struct SimOptions {
   /// independence at 0.1 N and its cost: benchmarks/RESULTS.md, "step independence". 1e9 takes
   /// the slip from the start of the step (explicit: a stalled wheel chatters at the step rate).
   double slip_force_tolerance = 0.1;
+  /// Implicit slip's first guess: each wheel's soil-row levels predicted from its last three
+  /// steps and its slip from the last step's offset over eq 12 (state: in the Snapshot), so that
+  /// most steps are accepted after one solve; false: the last levels and eq 12 at the step's
+  /// start (before session 10). Either is accepted to slip_force_tolerance, so the two agree to
+  /// it (benchmarks/RESULTS.md, "Session 10: slip warm start").
+  bool slip_warm_start = true;
   /// A step in which a wheel touches an obstacle (a box or rock) is taken as this many substeps
   /// of dt / n. The §3.4 contact (20 kN/m, 20 N s/m on a 3 kg wheel assembly: 82 rad/s, damping
   /// ratio 0.04) is integrated with its spring explicit and its damper implicit where the

@@ -198,7 +198,7 @@ void RoverSim::Impl::prepare_ground() {
 // would have predicted the last step best. Only a guess: the loop accepts a step when its levels
 // and slips agree with the solve's within SimOptions::slip_force_tolerance, as before.
 void RoverSim::Impl::warm_start_levels() {
-  if (opt.ground != GroundType::Soil) return;
+  if (opt.ground != GroundType::Soil || !opt.slip_warm_start) return;
   const auto predict = [](int steps, double l1, double l2, double l3) {
     if (steps < 3) return l1;  // the wheel has not been on soil for three steps: the last level
     const double constant = std::abs(l1 - l2), linear = std::abs(l1 - (2.0 * l2 - l3)),
@@ -217,6 +217,7 @@ void RoverSim::Impl::warm_start_levels() {
 // difference exceeds kSlipTolerance (below it, eq 12's value serves: a guess off by less costs
 // no solve, an extra soil split per wheel would). The soil terms are set at the guess.
 void RoverSim::Impl::warm_start_slips(Eigen::Vector4d& sigma) {
+  if (!opt.slip_warm_start) return;
   for (int i = 0; i < 4; ++i) {
     if (!ground[i].active || !std::isfinite(slip_offset[i])) continue;
     const double guess = std::clamp(sigma[i] + slip_offset[i], -1.0, 1.0);
