@@ -1,13 +1,14 @@
 // ERNEST on ODE: the obstacle contacts of a step (seed 004 §3.4: the rigid wheel–obstacle
 // contact, a linear spring–damper with Coulomb friction) and the substeps of a step that touches
-// an obstacle (SimOptions::obstacle_substeps). Collision (a broad phase, then dSpaceCollide2 of
-// the rover's space against each obstacle it may touch), one contact per rover-body–obstacle
+// an obstacle (SimOptions::obstacle_substeps). Collision (a broad phase per rover geom, exact
+// early-outs for the wheels, then ODE's collider), one contact per rover-body–obstacle
 // pair, its §3.4 rows' ERP / CFM (obstacle_contacts.hpp) and the bodies saved and restored
 // between the attempts of a step. The rows are emitted and checked
 // in rover_rigid.cpp (emit_obstacles, settle_obstacles); the step itself is rover_step.cpp.
 #include "ernest/dynamics/obstacle_contacts.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -66,6 +67,22 @@ SpringDamperRow spring_damper_row(double k, double c, double h, double mass_boun
     r.cfm = implicit_row.cfm(h);
   }
   return r;
+}
+
+bool cylinder_box_disjoint(const Vec3& c, const Vec3& u, double r, double hl, const Vec3& b,
+                           const Mat3& rb, const Vec3& e) {
+  const Vec3 q = rb.transpose() * (c - b), uq = rb.transpose() * u;  // box frame
+  // reach of the cylinder along a unit axis n: r sqrt(1 - (n.u)^2) + hl |n.u|
+  const auto reach = [&](double nu) {
+    return r * std::sqrt(std::max(0.0, 1.0 - nu * nu)) + hl * std::abs(nu);
+  };
+  for (int i = 0; i < 3; ++i)  // the box's face normals
+    if (std::abs(q[i]) > e[i] + reach(uq[i]) + kDisjointMargin) return true;
+  const Vec3 d = q - q.cwiseMax(-e).cwiseMin(e);  // from the box's nearest point to c
+  const double dist = d.norm();
+  if (dist > kDisjointMargin && dist > reach(d.dot(uq) / dist) + kDisjointMargin) return true;
+  // the cylinder's axis
+  return std::abs(uq.dot(q)) > hl + e.dot(uq.cwiseAbs()) + kDisjointMargin;
 }
 
 }  // namespace detail
@@ -202,34 +219,79 @@ void RoverSim::Impl::prepare_obstacles() {
   n_obstacle_contacts = 0;
   n_touched = 0;
   if (obstacle_geoms.empty()) return;
+  const double wheel_radius = p.wheel_radius, wheel_half_width = 0.5 * p.wheel_width;
   // Broad phase: the rover's bounding box against each obstacle's (static: taken once by
-  // build()), then the rover's geoms against the few obstacles it overlaps. dSpaceCollide2 of the
+  // build()), then each rover geom's box against it, and for a wheel the exact early-outs of
+  // cylinder_box_disjoint(); ODE's collider (near()) only for what remains. dSpaceCollide2 of the
   // two simple spaces tested every rover geom against every obstacle (6 x 100 box tests a call:
-  // 10 % of a step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps").
-  // Never let an exception cross ODE's C callback: capture it and rethrow after the collision.
-  const auto callback = [](void* data, dGeomID a, dGeomID b) {
-    auto* self = static_cast<Impl*>(data);
-    if (self->callback_error) return;
-    try {
-      self->near(a, b);
-    } catch (...) {
-      self->callback_error = std::current_exception();
+  // 10 % of a step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps"); of
+  // the rover's space against each overlapping obstacle, its boxes and call overhead still cost
+  // 2.5k instructions a step, and a quarter of its cylinder-box calls among 20 rocks found no
+  // contact (RESULTS.md, "Session 10: collision"). The geoms' boxes here are ODE's own formulas
+  // (a box's, a cylinder's projection on each axis: exact) without cleaning ODE's space, and
+  // kDisjointMargin wider: disjoint boxes prove disjoint shapes, where ODE finds no point.
+  // The geoms are visited in a fixed order (chassis, bogie, wheels), the contacts in that order.
+  std::array<std::array<double, 6>, 6> gbox;
+  std::array<double, 6> box = {HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL};
+  std::array<Vec3, 6> centre;
+  std::array<Mat3, 6> frame;
+  for (int j = 0; j < 6; ++j) {
+    centre[j] = to_vec(dGeomGetPosition(geom[j]));
+    frame[j] = to_mat(dGeomGetRotation(geom[j]));
+    Vec3 ext;
+    if (j >= 2) {  // the cylinder's axis: its local z
+      const Vec3 u = frame[j].col(2);
+      ext = wheel_radius * (Vec3::Ones() - u.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt() +
+            wheel_half_width * u.cwiseAbs();
+    } else {
+      dVector3 lengths;
+      dGeomBoxGetLengths(geom[j], lengths);
+      ext = frame[j].cwiseAbs() * (0.5 * to_vec(lengths));
     }
-  };
-  const dGeomID rover = reinterpret_cast<dGeomID>(rover_space);
-  dReal box[6];
-  dGeomGetAABB(rover, box);
-  for (std::size_t i = 0; i < obstacle_geoms.size(); ++i) {
-    const std::array<double, 6>& ob = obstacle_aabb[i];
-    if (ob[0] > box[1] || ob[1] < box[0] || ob[2] > box[3] || ob[3] < box[2] || ob[4] > box[5] ||
-        ob[5] < box[4])
-      continue;
-    dSpaceCollide2(rover, obstacle_geoms[i], this, callback);
+    for (int i = 0; i < 3; ++i) {
+      gbox[j][2 * i] = centre[j][i] - ext[i] - kDisjointMargin;
+      gbox[j][2 * i + 1] = centre[j][i] + ext[i] + kDisjointMargin;
+      box[2 * i] = std::min(box[2 * i], gbox[j][2 * i]);
+      box[2 * i + 1] = std::max(box[2 * i + 1], gbox[j][2 * i + 1]);
+    }
   }
-  if (callback_error) {
-    std::exception_ptr e = callback_error;
-    callback_error = nullptr;
-    std::rethrow_exception(e);
+  // The obstacles whose boxes may overlap the rover's along x: lowest x within the widest box's
+  // width below the rover's box, found by bisection of the obstacles sorted by it; visited in
+  // their own order (the order of the contacts), or all of them if there are too many.
+  std::array<int, kMaxObstacleContacts> near_x;
+  int n_near = 0;
+  const auto by_x = [&](double x) {
+    return std::lower_bound(obstacle_by_x.begin(), obstacle_by_x.end(), x,
+                            [&](int k, double v) { return obstacle_aabb[k][0] < v; });
+  };
+  const auto first = by_x(box[0] - obstacle_max_width), last = by_x(box[1]);
+  const bool all = last - first > static_cast<std::ptrdiff_t>(near_x.size());
+  if (!all) {
+    for (auto k = first; k != last; ++k) near_x[n_near++] = *k;
+    std::sort(near_x.begin(), near_x.begin() + n_near);
+  }
+  const int n_visit = all ? static_cast<int>(obstacle_geoms.size()) : n_near;
+  for (int v = 0; v < n_visit; ++v) {
+    const int i = all ? v : near_x[v];
+    const std::array<double, 6>& ob = obstacle_aabb[i];
+    const auto apart = [&](const std::array<double, 6>& b1) {
+      return b1[0] > ob[1] || b1[1] < ob[0] || b1[2] > ob[3] || b1[3] < ob[2] || b1[4] > ob[5] ||
+             b1[5] < ob[4];
+    };
+    if (apart(box)) continue;
+    const dGeomID rock = obstacle_geoms[i];
+    for (int j = 0; j < 6; ++j) {
+      if (apart(gbox[j])) continue;
+      if (j >= 2) {
+        dVector3 lengths;
+        dGeomBoxGetLengths(rock, lengths);
+        if (cylinder_box_disjoint(centre[j], frame[j].col(2), wheel_radius, wheel_half_width,
+                                  to_vec(dGeomGetPosition(rock)), to_mat(dGeomGetRotation(rock)),
+                                  0.5 * to_vec(lengths)))
+          continue;
+      }
+      near(geom[j], rock);
+    }
   }
   set_obstacle_rows();
 }

@@ -6,6 +6,8 @@
 
 #include <ode/ode.h>
 
+#include <Eigen/Core>
+
 namespace ernest::dynamics::detail {
 
 /// One contact per rover-body–obstacle pair from the n points ODE's collider returns (4-6 for a
@@ -38,5 +40,18 @@ struct SpringDamperRow {
 };
 constexpr double kMaxExplicitOmegaH = 1.5;  // 25 % below symplectic Euler's limit of 2
 SpringDamperRow spring_damper_row(double stiffness, double damping, double h, double mass_bound);
+
+/// Whether a cylinder (centre c, unit axis u, radius r, half length hl: a wheel) and a box (centre
+/// b, rotation rb whose columns are its axes, half sizes e: a rock) are disjoint, by exact
+/// separating-axis tests, each of which proves it: the box's three face normals, the cylinder's
+/// axis, and the direction from the box's point nearest c to c (the box lies behind the plane
+/// through that point; the cylinder reaches at most r sqrt(1 - (n.u)^2) + hl |n.u| towards it,
+/// within its bounding sphere). A gap must exceed kDisjointMargin so that a pair ODE's collider
+/// would find just touching (rounding) is left to it. False means "may touch": the broad phase
+/// (prepare_obstacles) calls ODE's dCollideCylinderBox only then (10.9k instructions a call).
+constexpr double kDisjointMargin = 1e-9;  // [m]
+bool cylinder_box_disjoint(const Eigen::Vector3d& c, const Eigen::Vector3d& u, double r, double hl,
+                           const Eigen::Vector3d& b, const Eigen::Matrix3d& rb,
+                           const Eigen::Vector3d& e);
 
 }  // namespace ernest::dynamics::detail

@@ -279,7 +279,12 @@ void RoverSim::Impl::build() {
     std::array<double, 6> aabb;  // static: the broad phase's (obstacle_contacts.cpp)
     dGeomGetAABB(gb, aabb.data());
     obstacle_aabb.push_back(aabb);
+    obstacle_max_width = std::max(obstacle_max_width, aabb[1] - aabb[0]);
   }
+  obstacle_by_x.resize(obstacle_aabb.size());  // the broad phase's search by lowest x
+  for (std::size_t i = 0; i < obstacle_by_x.size(); ++i) obstacle_by_x[i] = static_cast<int>(i);
+  std::sort(obstacle_by_x.begin(), obstacle_by_x.end(),
+            [&](int a, int b) { return obstacle_aabb[a][0] < obstacle_aabb[b][0]; });
 
   // Nominal placement so that joints are created in a consistent pose. place() tilts the chassis
   // to the terrain under the origin, so the axes below are given as body axes in the world (on a
@@ -387,7 +392,6 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   explicit_motor_torque.fill(0.0);
   pending_force.setZero();
   diverged = false;
-  callback_error = nullptr;
 }
 
 }  // namespace ernest::dynamics

@@ -141,6 +141,8 @@ struct RoverModel {
   dJointID gimbal_motor = nullptr;  // two-axis AMotor: yaw (chassis z), roll (bogie x)
   std::vector<dGeomID> obstacle_geoms;
   std::vector<std::array<double, 6>> obstacle_aabb;  // their bounding boxes (ODE's order)
+  std::vector<int> obstacle_by_x;   // their indices by the boxes' lowest x (prepare_obstacles)
+  double obstacle_max_width = 0.0;  // the widest box along x
 };
 
 // The data (pinocchio's Data): everything a step reads and writes. The state a Snapshot carries
@@ -191,7 +193,6 @@ struct RoverData {
   dJointFeedback gimbal_fb{}, gimbal_motor_fb{};
   // Ground feedback: each wheel's contact with the terrain (rover_rows.cpp).
   std::array<dJointFeedback, 4> ground_fb{};
-  std::exception_ptr callback_error;
 
   // ---- per-step working data ----
   std::array<detail::GroundContact, 4> ground{};
