@@ -20,7 +20,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   o.friction = 0.8;
   o.obstacle_substeps = std::atoi(argv[3]);
   o.guess_obstacle_contacts = argc < 5 || std::atoi(argv[4]) != 0;
+  o.slip_warm_start = argc < 6 || std::atoi(argv[5]) != 0;
   const double speed = 0.15;
   RoverSim sim(RoverParameters{}, HeightMap::flat(40, 20, 0.25, 0, -10, -10), rocks, o);
   sim.reset(0, 0, 0, 0, 0, speed);

@@ -384,6 +384,9 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
   obstacle_mode.fill(RowState::Free);
   obstacle_next = obstacle_mode;  // (see restore())
   slip_rate = 0.0;
+  shear_x_past = compaction_past = {};
+  soil_steps.fill(0);
+  slip_offset = no_slip_offset();
   lcp.clear();
   row_force.fill(0.0);
   explicit_motor_torque.fill(0.0);

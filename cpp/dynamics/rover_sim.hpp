@@ -91,6 +91,12 @@ struct SimOptions {
   /// independence at 0.1 N and its cost: benchmarks/RESULTS.md, "step independence". 1e9 takes
   /// the slip from the start of the step (explicit: a stalled wheel chatters at the step rate).
   double slip_force_tolerance = 0.1;
+  /// Implicit slip's first guess: each wheel's soil-row levels predicted from its last three
+  /// steps and its slip from the last step's offset over eq 12 (state: in the Snapshot), so that
+  /// most steps are accepted after one solve; false: the last levels and eq 12 at the step's
+  /// start (before session 10). Either is accepted to slip_force_tolerance, so the two agree to
+  /// it (benchmarks/RESULTS.md, "Session 10: slip warm start").
+  bool slip_warm_start = true;
   /// A step in which a wheel touches an obstacle (a box or rock) is taken as this many substeps
   /// of dt / n. The §3.4 contact (20 kN/m, 20 N s/m on a 3 kg wheel assembly: 82 rad/s, damping
   /// ratio 0.04) is integrated with its spring explicit and its damper implicit where the
@@ -237,6 +243,13 @@ struct Snapshot {
   /// The largest growth rate of a wheel's slip estimated in the last step [1/s]; it decides the
   /// next obstacle step's substeps when SimOptions::obstacle_substeps is 1 (obstacle_contacts.cpp).
   double slip_rate = 0.0;
+  /// The implicit slip's first guesses (cpp/dynamics/rover_step.cpp): per wheel the soil rows'
+  /// levels of the two steps before the last (shear_x, compaction), the steps it has been on soil
+  /// without a break (0-3), and its last accepted slip minus eq 12's at that step's start (NaN:
+  /// none).
+  std::array<std::array<double, 4>, 2> shear_x_past{}, compaction_past{};
+  std::array<int, 4> soil_steps{};
+  std::array<double, 4> slip_offset{};
   /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
   /// of the steps that follow; internal layout, see cpp/dynamics/ode_lcp.hpp).
   std::vector<std::uint64_t> solver_patterns;

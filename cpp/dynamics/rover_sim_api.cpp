@@ -169,6 +169,10 @@ Snapshot RoverSim::snapshot() const {
     for (int k = 0; k < 3; ++k) s.rigid_deflection[i][k] = impl_->rigid_deflection[i][k];
   s.obstacle_mode = impl_->obstacle_mode;
   s.slip_rate = impl_->slip_rate;
+  s.shear_x_past = impl_->shear_x_past;
+  s.compaction_past = impl_->compaction_past;
+  s.soil_steps = impl_->soil_steps;
+  s.slip_offset = impl_->slip_offset;
   impl_->lcp.save(s.solver_patterns);
   s.valid = true;
   return s;
@@ -210,6 +214,18 @@ void RoverSim::restore(const Snapshot& s) {
   require(std::isfinite(s.slip_rate) && s.slip_rate >= 0.0,
           "RoverSim.restore: corrupt snapshot (slip_rate)");
   impl_->slip_rate = s.slip_rate;
+  for (int i = 0; i < 4; ++i) {
+    require(s.soil_steps[i] >= 0 && s.soil_steps[i] <= 3,
+            "RoverSim.restore: corrupt snapshot (soil_steps)");
+    require(!(std::abs(s.slip_offset[i]) > 2.0) && std::isfinite(s.shear_x_past[0][i]) &&
+                std::isfinite(s.shear_x_past[1][i]) && std::isfinite(s.compaction_past[0][i]) &&
+                std::isfinite(s.compaction_past[1][i]),
+            "RoverSim.restore: corrupt snapshot (slip warm start)");
+  }
+  impl_->shear_x_past = s.shear_x_past;
+  impl_->compaction_past = s.compaction_past;
+  impl_->soil_steps = s.soil_steps;
+  impl_->slip_offset = s.slip_offset;
   // A step without obstacle contacts keeps obstacle_next as it was (settle_obstacles is not
   // called) and then takes it as obstacle_mode: between steps the two are equal, and a restored
   // (or reset) rover must have them equal too, else its first step off the rocks takes the

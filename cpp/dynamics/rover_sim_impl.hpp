@@ -151,6 +151,10 @@ struct RoverModel {
 // the hot loop never allocates).
 struct RoverData {
   using Vec3 = detail::Vec3;
+  static std::array<double, 4> no_slip_offset() {
+    const double n = std::nan("");
+    return {n, n, n, n};
+  }
 
   Commands cmd{};
   RoverState st{};
@@ -224,6 +228,13 @@ struct RoverData {
   // d s_end / d sigma over h, step_once; 0 where none was measured); step() substeps an obstacle
   // step whose h lambda would reach 1/2 (in the Snapshot).
   double slip_rate = 0.0;
+  // The implicit slip's first guesses (rover_step.cpp, warm_start_levels / warm_start_slips; in
+  // the Snapshot): per wheel the soil rows' levels (shear_x, compaction) of the two steps before
+  // the last, the steps the wheel has been on soil without a break (0-3), and the amount the last
+  // step's accepted slip differed from eq 12 at its start (NaN: none, or the wheel drove).
+  std::array<std::array<double, 4>, 2> shear_x_past{}, compaction_past{};
+  std::array<int, 4> soil_steps{};
+  std::array<double, 4> slip_offset = no_slip_offset();
   std::uint64_t obstacle_off = 0;
   bool rows_held = true;  // settle(): the guessed rows (not the obstacles) held
   std::array<dGeomID, detail::kMaxObstacleContacts> touched{};  // obstacles in the contacts
@@ -292,6 +303,11 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
                      Vec3& ea) const;
   void prepare_actuators(double psi, double phi);
   void prepare_ground();
+  void warm_start_levels();
+  void warm_start_slips(Eigen::Vector4d& sigma);
+  void record_warm_start(const std::array<double, 4>& start_x, const std::array<double, 4>& start_c,
+                         const Eigen::Vector4d& sigma, const Eigen::Vector4d& start_sigma,
+                         const std::array<bool, 4>& driving);
   struct SoilTerms {
     double slip = 0.0, ax = 0.0, ay = 0.0, comp = 0.0, fz = 0.0, axle_torque = 0.0;
     double fz_pressure = 0.0;  // eq 32 without the shear part, not floored

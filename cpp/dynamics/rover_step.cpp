@@ -10,7 +10,8 @@
 // the step every guess is checked against its row's law. Checked guesses are the LCP solution (it
 // is unique: J M^-1 J^T + CFM is positive definite); a wrong guess is retried (up to three
 // guesses), then the rows whose guesses keep failing are handed to ODE with their bounds.
-// This file: the step's set-up (actuators, ground) and the attempt loop; obstacle_contacts.cpp:
+// This file: the step's set-up (actuators, ground) and the attempt loop; rover_slip.cpp: the soil's
+// terms at a slip and the implicit slip's first guesses; obstacle_contacts.cpp:
 // the obstacles' contacts and the substeps of a step that touches one (step());
 // rover_rows.cpp: emitting and checking the rows; rover_outputs.cpp: what the step reports.
 #include <algorithm>
@@ -188,104 +189,6 @@ void RoverSim::Impl::prepare_ground() {
   }
 }
 
-// Bekker–Wong (eqs 12–32) at slip s for wheel i, split into what ODE integrates implicitly and
-// the rest:
-// (a) the shear, whose regularisation tau -> sign(-v_c) min(|v_c|/eps_contact, 1) tau (eqs
-//     28–29) is a viscous law with a force cap: friction rows at the contact point with
-//     force-dependent slip (velocity = slip * force) and bounds +-F_sat;
-// (b) the compaction resistance -sign(v_x) rb int sigma sin (eq 30), whose regularised sign
-//     clamp(v_x / eps_direction) is the same kind of law on the wheel-centre velocity: a
-//     linear-motor row with CFM = eps_direction / F and bounds +-F;
-// (c) the normal force (eq 32, with the shear's normal part at the shear row's level) as the
-//     target of the contact's normal row, a damper that never pulls: F_n = max(0, F_z - c v_n);
-// (d) explicit forces: the share of the axle torque the rows do not produce, at the rows' levels.
-// The levels (shear_x, compaction) are the step's own: solved together with the slip in step().
-// Taken from the previous step instead they lag by one step, and where the rover rocks against an
-// obstacle or on a ripple that lag made the energy converge only at first order in the step
-// (benchmarks/RESULTS.md, "step independence").
-// Treated explicitly, (a) and (b) are stiff dampers (~1e4 N s/m) unstable at any useful step.
-// The slip itself is chosen by step() so that it matches eq 12 at the end of the step.
-// soil.split(g.cs, slip), memoised for the step (GroundContact::memo_slip): the implicit-slip
-// check after a solve usually asks for the slip the solve used.
-const soil::SoilSplit& RoverSim::Impl::soil_split(int i, double slip) {
-  GroundContact& g = ground[i];
-  for (int k = 0; k < 2; ++k)
-    if (g.memo_slip[k] == slip) return g.memo_split[k];
-  const int k = g.memo_next;
-  g.memo_split[k] = soil.split(g.cs, slip);  // throws (memo unchanged) on a non-finite input
-  g.memo_slip[k] = slip;
-  g.memo_next = 1 - k;
-  return g.memo_split[k];
-}
-
-RoverSim::Impl::SoilTerms RoverSim::Impl::soil_terms_at(int i, double slip) {
-  const GroundContact& g = ground[i];
-  const soil::SoilSplit& s = soil_split(i, slip);
-  SoilTerms t;
-  t.slip = s.slip;
-  t.ax = std::max(s.fx_shear, 0.0);
-  t.ay = std::max(s.fy_shear, 0.0);
-  const double sign_vx = g.cs.vx > 0.0 ? 1.0 : -1.0;
-  t.comp = std::max(-s.fx_pressure * sign_vx, 0.0);  // rb int sigma sin theta (eq 30)
-  if (t.comp < kMinRowBound) t.comp = 0.0;
-  const double sx = shear_x[i];
-  t.fz_pressure = s.fz_pressure;
-  t.fz = std::max(0.0, s.fz_pressure) + s.fz_shear * sx;
-  const double arm = g.arm.cross(g.fx).dot(g.axle);  // axle torque per unit x force at the patch
-  const double row_torque = arm * t.ax * sx;
-  const double soil_torque = -s.torque_shear * sx;  // the soil applies -axle_torque
-  // The compaction row acts at the wheel centre; its moment about the axle (at the patch) is
-  // added at the row's level.
-  t.axle_torque = soil_torque - row_torque + arm * compaction[i];
-  return t;
-}
-
-void RoverSim::Impl::soil_terms(int i, double slip) {
-  GroundContact& g = ground[i];
-  const SoilTerms t = soil_terms_at(i, slip);
-  st.slip[i] = t.slip;
-  g.ax = t.ax;
-  g.ay = t.ay;
-  g.comp = t.comp;
-  g.fz = t.fz;
-  g.fz_pressure = t.fz_pressure;
-  g.axle_torque = t.axle_torque;
-}
-
-// How far the soil terms of the step (at the slip it used) are from those at the slip eq 12
-// gives at its end: the largest change of a row bound or explicit force [N], axle torques
-// counted as forces at the wheel radius.
-double RoverSim::Impl::soil_terms_gap(int i, double end_slip) {
-  const GroundContact& g = ground[i];
-  const SoilTerms t = soil_terms_at(i, end_slip);
-  return std::max({std::abs(t.ax - g.ax), std::abs(t.ay - g.ay), std::abs(t.comp - g.comp),
-                   std::abs(t.fz - g.fz), std::abs(t.axle_torque - g.axle_torque) / p.wheel_radius});
-}
-
-// The levels the soil rows of wheel i reached in the last solve (row_force, from settle()): the
-// shear used as a fraction of its cap and the compaction force. The soil's terms that the rows do
-// not produce (eq 32's shear part of the normal force, the axle torque) are evaluated at them.
-void RoverSim::Impl::soil_levels(int i) {
-  const GroundContact& g = ground[i];
-  shear_x[i] = shear_y[i] = compaction[i] = 0.0;
-  if (!g.active || opt.ground != GroundType::Soil) return;
-  const double* f = &row_force[kRowsPerWheel * i];
-  shear_x[i] = g.ax >= kMinRowBound ? clamp_unit(f[kShearX] / g.ax) : 0.0;
-  shear_y[i] = g.ay >= kMinRowBound ? clamp_unit(f[kShearY] / g.ay) : 0.0;
-  compaction[i] = f[kCompaction];
-}
-
-// Eq 12's inputs at the end of an attempt: the wheel centre's and the contact point's
-// longitudinal velocities ODE reached, in the step's contact frame.
-void RoverSim::Impl::end_velocity(int i, double& vx, double& vcx) const {
-  const GroundContact& g = ground[i];
-  const dBodyID wb = body[2 + i];
-  const Vec3 v = to_vec(dBodyGetLinearVel(wb));
-  const Vec3 vp = v + to_vec(dBodyGetAngularVel(wb)).cross(g.arm);
-  vx = v.dot(g.fx);
-  vcx = vp.dot(g.fx);
-}
-
 // One solve of the step at the current soil terms: the guessed rows (guess: in; next: where the
 // rows' laws put them; tried: the last guess emitted), retried as described in step(). Returns
 // whether a guess held (false: the rows were solved with their bounds, or guessing is off).
@@ -330,6 +233,8 @@ void RoverSim::Impl::step_once() {
   base_force.fill(Vec3::Zero());
   base_torque.fill(Vec3::Zero());
   prepare_actuators(psi, phi);
+  const std::array<double, 4> start_x = shear_x, start_c = compaction;
+  warm_start_levels();
   prepare_ground();
   if (opt.ground == GroundType::Rigid) prepare_rigid();
   if (!obstacles_collected) prepare_obstacles();
@@ -365,8 +270,9 @@ void RoverSim::Impl::step_once() {
   // solve (a fixed point alongside the slip) and their change counts in the same force gap.
   // The wheels share the chassis, so the residual r(sigma) = s_end - sigma
   // couples them: Broyden's method on the four slips from J = -I (the first update is the
-  // fixed-point step, eq 12 at the end), clamped to [-1, 1]. After kMaxSlipSolves solves the
-  // step is solved once more at the best slips seen.
+  // fixed-point step, eq 12 at the end), clamped to [-1, 1], from the first guesses of
+  // warm_start_levels / warm_start_slips. After kMaxSlipSolves solves the step is solved once
+  // more at the best slips seen.
   // Backward Euler is right where the slip damps the motion (the stalled wheel above: a larger
   // slip gives a smaller end slip), not where it drives it. A wheel spinning against an obstacle
   // face on soil stands at v_x ~ 0, where eq 12's factor (1 - exp(-eps v_x^2)) makes the slip, and
@@ -382,9 +288,10 @@ void RoverSim::Impl::step_once() {
   const bool soft = opt.ground == GroundType::Soil;
   Eigen::Vector4d sigma, res = Eigen::Vector4d::Zero();
   for (int i = 0; i < 4; ++i) sigma[i] = st.slip[i];
+  const Eigen::Vector4d start_sigma = sigma;  // eq 12 at the start: a driving wheel's slip
+  if (soft) warm_start_slips(sigma);
   Eigen::Vector4d best_sigma = sigma, prev_sigma = sigma, prev_res = res;
   Eigen::Matrix4d jac = -Eigen::Matrix4d::Identity();
-  const Eigen::Vector4d start_sigma = sigma;
   Eigen::Vector4d last_sigma = sigma, last_end = sigma;  // each wheel's last solve: sigma, s_end
   std::array<bool, 4> driving{};  // explicit slip: the slip drives this wheel's motion
   double rate = 0.0;  // the largest secant over h: slip_rate (see step() in obstacle_contacts.cpp)
@@ -457,6 +364,7 @@ void RoverSim::Impl::step_once() {
       sigma[i] = ground[i].active && !driving[i] ? std::clamp(sigma[i] + step[i], -1.0, 1.0)
                                                 : sigma[i];
   }
+  if (soft) record_warm_start(start_x, start_c, sigma, start_sigma, driving);
   if (driving[0] || driving[1] || driving[2] || driving[3]) ++stats.slip_driving;
   slip_rate = rate;
   if (opt.ground == GroundType::Rigid) commit_rigid();

@@ -127,6 +127,7 @@ class SimOptions:
     max_speed: float
     max_angular_speed: float
     slip_force_tolerance: float
+    slip_warm_start: bool
     obstacle_substeps: int
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
