@@ -37,7 +37,9 @@ def main(argv=None) -> int:
         if not any(c in label for c in wanted):
             continue
         for name, (pol, passive) in ctrls.items():
-            for sub, ks in ((1, (1, 2, 4, 8, 16)), (default, (1, 2, 4))):
+            # With the default of one substep the second row would repeat the first.
+            rows = ((1, (1, 2, 4, 8, 16)),) + (((default, (1, 2, 4)),) if default != 1 else ())
+            for sub, ks in rows:
                 cells = []
                 for k in (1, 2, 4, 8, 16):
                     if k not in ks:

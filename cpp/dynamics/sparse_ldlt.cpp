@@ -157,19 +157,17 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
       for (W m = column[c] & ~before<W>(pc + 1); m; m &= m - 1) filled_[low(m)] |= bit(pc);
     }
 
-    // Sparse columns as position lists (ascending) and runs, and L's rows (positions) as masks
-    // of their sparse columns (for the copies).
+    // Sparse columns as position lists (ascending), and L's rows (positions) as masks of their
+    // sparse columns (for the copies).
     std::array<W, kMaxRows> row_cols;
     for (int r = 0; r < n; ++r) row_cols[r] = 0;
-    int nr = 0, nruns = 0;
+    int nr = 0;
     for (int c = 0; c < dense_from_; ++c) {
       col_start_[c] = static_cast<std::uint16_t>(nr);
-      run_start_[c] = static_cast<std::uint16_t>(nruns);
       W below = 0;  // positions
       for (W m = column[c]; m; m &= m - 1) below |= bit(pos[low(m)]);
       while (below) {
         const int first = low(below), count = run_from(below, first);
-        runs_[nruns++] = Run{static_cast<std::uint8_t>(first), static_cast<std::uint8_t>(count)};
         for (int r = first; r < first + count; ++r) {
           col_rows_[nr++] = static_cast<std::uint8_t>(r);
           row_cols[r] |= bit(c);
@@ -178,7 +176,6 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
       }
     }
     col_start_[dense_from_] = static_cast<std::uint16_t>(nr);
-    run_start_[dense_from_] = static_cast<std::uint16_t>(nruns);
     n_supers_ = 0;
     for (int c = 0; c < dense_from_;) {
       int w = 1;

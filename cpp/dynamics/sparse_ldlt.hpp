@@ -47,14 +47,9 @@ class LdltPlan {
   std::array<Mask, kMaxRows> filled_{};  // pattern of L + D (lower), row numbering
   std::array<unsigned, kMaxRows> rows_{};
   std::array<std::uint8_t, kMaxRows> perm_{};  // position k of the order holds row perm_[k]
-  // Below-diagonal rows (positions) of each sparse column k < dense_from_, ascending, and the
-  // same as runs of consecutive positions (the inner loops run over contiguous memory).
-  struct Run {
-    std::uint8_t first, count;
-  };
-  std::array<std::uint16_t, kMaxRows + 1> col_start_{}, run_start_{};
+  // Below-diagonal rows (positions) of each sparse column k < dense_from_, ascending.
+  std::array<std::uint16_t, kMaxRows + 1> col_start_{};
   std::array<std::uint8_t, kMaxRows * kMaxRows / 2> col_rows_{};
-  std::array<Run, kMaxRows * kMaxRows / 2> runs_{};
   // Supernodes among the sparse columns: consecutive columns whose patterns nest (column k's is
   // k + 1 and column k + 1's), so that they share the rows below the last one. Width 1 = a lone
   // column.
