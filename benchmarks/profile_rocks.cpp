@@ -2,10 +2,14 @@
 // 0.15 m/s on M90 (friction 0.8 on the rocks) into box rocks read from a file, as
 // bench_dynamics.py's rolling_rover; the 50 steps of run-up are not counted (callgrind's
 // collection is switched on after them when run with --collect-atstart=no and
-// --toggle-collect=profiled_steps). Prints the solver's counts.
+// --toggle-collect=profiled_steps). REPEATS > 1 restores the state after the run-up and runs the
+// STEPS again, as bench_dynamics.py does: long enough for a time profile with
+//   perf record -e cpu-clock -F 20000 -g build/bench/benchmarks/profile_rocks /tmp/rocks20.txt 800 1 1 1 200
+// Prints the solver's counts.
 //   python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt
 //   valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*profiled_steps*' \
 //       build/bench/benchmarks/profile_rocks /tmp/rocks20.txt 400 8
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -20,7 +24,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -40,7 +44,12 @@ int main(int argc, char** argv) {
   for (auto& w : c.wheel_speed) w = speed / sim.parameters().wheel_radius;
   sim.set_commands(c);
   sim.step_n(50);
-  profiled_steps(sim, std::atoi(argv[2]));
+  const Snapshot start = sim.snapshot();
+  const int repeats = argc < 7 ? 1 : std::max(1, std::atoi(argv[6]));
+  for (int r = 0; r < repeats; ++r) {
+    if (r > 0) sim.restore(start);
+    profiled_steps(sim, std::atoi(argv[2]));
+  }
   const SolverStats& s = sim.solver_stats();
   std::printf("%zu rocks: x %.3f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
               "bounded %llu; slip solves %llu, driving %llu; guesses first %llu later %llu "
