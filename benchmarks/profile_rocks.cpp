@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <string>
 #include <vector>
 
 #include "ernest/dynamics/rover_sim.hpp"
@@ -24,7 +25,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [stepper ode|own]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -37,6 +38,8 @@ int main(int argc, char** argv) {
   o.obstacle_substeps = std::atoi(argv[3]);
   o.guess_obstacle_contacts = argc < 5 || std::atoi(argv[4]) != 0;
   o.slip_warm_start = argc < 6 || std::atoi(argv[5]) != 0;
+  // STEPPER: who steps the bodies (SimOptions::stepper; default: the option's default)
+  if (argc >= 8) o.stepper = std::string(argv[7]) == "own" ? Stepper::Own : Stepper::Ode;
   const double speed = 0.15;
   RoverSim sim(RoverParameters{}, HeightMap::flat(40, 20, 0.25, 0, -10, -10), rocks, o);
   sim.reset(0, 0, 0, 0, 0, speed);
@@ -53,12 +56,13 @@ int main(int argc, char** argv) {
   const SolverStats& s = sim.solver_stats();
   std::printf("%zu rocks: x %.3f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
               "bounded %llu; slip solves %llu, driving %llu; guesses first %llu later %llu "
-              "pivoted %llu; contacts explicit %llu implicit %llu\n",
+              "pivoted %llu; contacts explicit %llu implicit %llu; own steps %llu fallbacks %llu\n",
               rocks.size(), sim.state().position.x(), (unsigned long long)s.sparse_solves,
               (unsigned long long)s.dense_solves, (unsigned long long)s.obstacle_guessed,
               (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves,
               (unsigned long long)s.slip_driving, (unsigned long long)s.first_guess,
               (unsigned long long)s.later_guess, (unsigned long long)s.pivoted,
-              (unsigned long long)s.obstacle_explicit, (unsigned long long)s.obstacle_implicit);
+              (unsigned long long)s.obstacle_explicit, (unsigned long long)s.obstacle_implicit,
+              (unsigned long long)s.own_steps, (unsigned long long)s.own_fallbacks);
   return 0;
 }

@@ -155,6 +155,11 @@ void bind_dynamics(py::module_& m) {
   py::enum_<GroundType>(m, "GroundType", "Soft soil (Bekker–Wong) or rigid ground (§3.4).")
       .value("Soil", GroundType::Soil)
       .value("Rigid", GroundType::Rigid);
+  py::enum_<Stepper>(m, "Stepper",
+                     "Who steps the rover's bodies: ODE's dWorldStep, or our own island step "
+                     "(the same step to rounding, faster)")
+      .value("Ode", Stepper::Ode)
+      .value("Own", Stepper::Own);
   py::enum_<ActuatorMode>(m, "ActuatorMode", "Velocity servo, torque command, or unpowered.")
       .value("Velocity", ActuatorMode::Velocity)
       .value("Torque", ActuatorMode::Torque)
@@ -194,6 +199,10 @@ void bind_dynamics(py::module_& m) {
                      "solve steps whose rows are unbounded or have a zero bound (contact "
                      "normals) by a sparse LDL^T (minimum-degree order) instead of ODE's dense "
                      "solver (same solution to rounding); False: ODE's solver for every step")
+      .def_readwrite("stepper", &SimOptions::stepper,
+                     "Stepper.Ode: ODE's dWorldStep; Stepper.Own: our own island step "
+                     "(cpp/dynamics/island_step.hpp), the same step to ~1e-10, falling back to "
+                     "dWorldStep where it does not reproduce it")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,
@@ -296,6 +305,10 @@ void bind_dynamics(py::module_& m) {
       .def_readonly("obstacle_implicit", &SolverStats::obstacle_implicit,
                     "obstacle contacts (per step or substep) whose spring was integrated implicitly "
                     "(effective mass too light for the explicit spring at the step)")
+      .def_readonly("own_steps", &SolverStats::own_steps,
+                    "attempts stepped by our own island step (SimOptions.stepper = Own)")
+      .def_readonly("own_fallbacks", &SolverStats::own_fallbacks,
+                    "attempts our own island step handed to ODE's dWorldStep")
       .def_readonly("obstacles_touched", &SolverStats::obstacles_touched,
                     "distinct obstacles in contact at the start of the last step")
       .def_readonly("fast_lcp", &SolverStats::fast_lcp,
@@ -313,7 +326,9 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.obstacle_guessed) + ", obstacle_bounded=" +
                std::to_string(s.obstacle_bounded) + ", obstacle_explicit=" +
                std::to_string(s.obstacle_explicit) + ", obstacle_implicit=" +
-               std::to_string(s.obstacle_implicit) + ", fast_lcp=" +
+               std::to_string(s.obstacle_implicit) + ", own_steps=" +
+               std::to_string(s.own_steps) + ", own_fallbacks=" +
+               std::to_string(s.own_fallbacks) + ", fast_lcp=" +
                (s.fast_lcp ? "True" : "False") + ")";
       });
 

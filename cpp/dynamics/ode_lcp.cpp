@@ -110,6 +110,8 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
   return true;
 }
 
+}  // namespace
+
 // The LCP as one linear system: the unbounded rows and the bounded rows guessed inside their
 // bounds ("active") are solved together, every other bounded row sits at its zero bound
 // (x = 0). Accepted only where Dantzig's method ends too (the solution is unique: A is
@@ -276,6 +278,8 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
   }
   return true;
 }
+
+namespace {
 
 // Seed 004 §3.4's Coulomb friction bounds a friction row i (findex[i] = k) by mu_i times the
 // final normal force x_k. ODE's Dantzig solver takes x_k from before it adds the friction rows,

@@ -92,6 +92,15 @@ struct LcpWorkspace {
   void load(const std::vector<std::uint64_t>& in);
 };
 
+/// ODE's LCP (A x = b + w, lo <= x <= hi with complementarity; A's lower triangle, row stride
+/// dPAD(n); b and x interleaved in pairsbx, lo and hi in pairslh; findex: friction rows; the first
+/// nub rows unbounded) solved with the sparse LDLᵀ and the remembered guesses of `ws`, checked as
+/// Dantzig's method ends (ode_lcp.cpp). Returns false, the outputs untouched, if it cannot (then
+/// ODE's Dantzig solver must). Called by the hook below, and directly by our own island step
+/// (island_step.hpp). Does not count the solve (LcpWorkspace::sparse): the caller does.
+bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx, double* outer_w,
+                  unsigned nub, const double* pairslh, const int* findex);
+
 /// While alive, dWorldStep calls on this thread solve through `ws` (not nested).
 class LcpScope {
  public:

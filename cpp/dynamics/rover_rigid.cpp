@@ -72,9 +72,7 @@ void RoverSim::Impl::emit_rigid(int i, RowModes modes) {
   ct.surface.slip2 = tangential_cfm[1];
   ct.surface.motion1 = -tangential_erp[0] / h * rigid_deflection[i].dot(g.fx);
   ct.surface.motion2 = -tangential_erp[1] / h * rigid_deflection[i].dot(g.fy);
-  dJointID j = dJointCreateContact(world, contacts, &ct);
-  dJointAttach(j, body[2 + i], nullptr);
-  dJointSetFeedback(j, &ground_fb[i]);
+  add_contact_joint(ct, body[2 + i], nullptr, &ground_fb[i]);
 }
 
 // After the step: the contact's forces, where its laws put each row (next[]) and the deflection
@@ -140,9 +138,7 @@ void RoverSim::Impl::emit_obstacles(RowModes modes) {
       c.surface.mode &= ~dContactApprox1;
       c.surface.mu = (obstacle_off >> k & 1) ? 0.0 : dInfinity;
     }
-    dJointID j = dJointCreateContact(world, contacts, &c);
-    dJointAttach(j, obstacle_bodies[2 * k], obstacle_bodies[2 * k + 1]);
-    dJointSetFeedback(j, &obstacle_fb[k]);
+    add_contact_joint(c, obstacle_bodies[2 * k], obstacle_bodies[2 * k + 1], &obstacle_fb[k]);
   }
 }
 

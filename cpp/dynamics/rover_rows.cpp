@@ -60,9 +60,7 @@ void RoverSim::Impl::emit_ground(int i, RowModes modes, Vec3& fw, Vec3& tw) {
       cj.surface.slip2 = slots[1].slip;
       cj.surface.motion2 = slots[1].motion;
     }
-    dJointID j = dJointCreateContact(world, contacts, &cj);
-    dJointAttach(j, wb, nullptr);
-    if (fb) dJointSetFeedback(j, fb);
+    add_contact_joint(cj, wb, nullptr, fb);
   };
   if (!soft) {  // rigid ground: rover_rigid.cpp
     emit_rigid(i, modes);
@@ -100,19 +98,14 @@ void RoverSim::Impl::emit_ground(int i, RowModes modes, Vec3& fw, Vec3& tw) {
       fw += g.fx * (mode == RowState::AtHi ? g.comp : -g.comp);
     } else {
       const double eps_dir = std::max(opt.soil.eps_direction, 1e-6);
-      dJointID lm = dJointCreateLMotor(world, contacts);
-      dJointAttach(lm, wb, nullptr);
-      dJointSetLMotorNumAxes(lm, 1);
-      dJointSetLMotorAxis(lm, 0, 0, g.fx.x(), g.fx.y(), g.fx.z());
-      dJointSetLMotorParam(lm, dParamVel, 0.0);
-      dJointSetLMotorParam(lm, dParamFMax, mode == RowState::Free ? dInfinity : g.comp);
-      dJointSetLMotorParam(lm, dParamCFM, eps_dir / g.comp);
+      add_lmotor_joint(wb, g.fx, mode == RowState::Free ? dInfinity : g.comp, eps_dir / g.comp);
     }
   }
 }
 
 // Joints and forces of one attempt (modes: a guess, or every guessed row with its bounds).
 void RoverSim::Impl::emit(RowModes modes) {
+  island.clear_attempt();
   std::array<Vec3, 6> f = base_force, t = base_torque;
   const auto mode_of = [&](int row) { return modes[row]; };
   // ---- drives

@@ -150,6 +150,9 @@ void SimOptions::validate() const {
   require_in_range(o, "max_angular_speed", max_angular_speed, 1e-3, 1e7);
   require_in_range(o, "slip_force_tolerance", slip_force_tolerance, 1e-6, 1e9);
   require_in_range(o, "obstacle_substeps", obstacle_substeps, 1, 64);
+  require(stepper == Stepper::Ode || stepper == Stepper::Own,
+          "SimOptions.stepper = " + std::to_string(static_cast<int>(stepper)) +
+              " must be Stepper.Ode (0) or Stepper.Own (1)");
 }
 
 void Commands::validate() const {
@@ -325,6 +328,16 @@ void RoverSim::Impl::build() {
     dJointSetAMotorNumAxes(wheel_motor[i], 1);
     dJointSetAMotorAxis(wheel_motor[i], 0, 1, rc0(0, 1), rc0(1, 1), rc0(2, 1));
     dJointSetFeedback(wheel_motor[i], &wheel_motor_fb[i]);
+  }
+  // Our own island step (SimOptions::stepper): the same bodies and joints, the hinges' second
+  // axes read while the bodies are where the axes were set.
+  island.bind(body);
+  island.add_universal(gimbal);
+  island.add_amotor(gimbal_motor);
+  for (int i = 0; i < 4; ++i) {
+    const dReal axle[3] = {rc0(0, 1), rc0(1, 1), rc0(2, 1)};
+    island.add_hinge(hinge[i], axle);
+    island.add_amotor(wheel_motor[i]);
   }
 }
 

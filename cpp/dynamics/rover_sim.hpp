@@ -28,6 +28,12 @@ class SimulationDiverged : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Who takes the step of the rover's bodies (SimOptions::stepper).
+enum class Stepper : int {
+  Ode = 0,  ///< ODE's dWorldStep (the constraint solve through the solver hook, ode_lcp.hpp)
+  Own = 1,  ///< our own island step (cpp/dynamics/island_step.hpp): the same step, faster
+};
+
 struct SimOptions {
   /// Physics step [s]. Default from the step-independence study in benchmarks/RESULTS.md ("step
   /// independence", issue 13): every evaluation course with the passive bogie and the crawling
@@ -111,6 +117,12 @@ struct SimOptions {
   /// and dt/8 (benchmarks/RESULTS.md, "One substep at every step size"). n > 1 substeps every
   /// obstacle step (the pre-session-9 behaviour with 8; comparisons).
   int obstacle_substeps = 1;
+  /// Who steps the bodies: ODE's dWorldStep, or our own island step that reproduces it for the
+  /// rover's bodies and joints (cpp/dynamics/island_step.hpp; agreement to ~1e-10 per step,
+  /// benchmarks/RESULTS.md "Session 11: our own island step"). Own falls back to dWorldStep for
+  /// any step it does not reproduce (a joint option it does not know, a solve the sparse path
+  /// refuses), so the two differ by rounding only.
+  Stepper stepper = Stepper::Ode;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
   void validate() const;
@@ -214,6 +226,11 @@ struct SolverStats {
   /// spring at the step (cpp/dynamics/obstacle_contacts.hpp).
   std::uint64_t obstacle_explicit = 0;
   std::uint64_t obstacle_implicit = 0;
+  /// Attempts (solves) stepped by our own island step (SimOptions::stepper == Own), and those it
+  /// handed to dWorldStep (a joint option it does not reproduce, or a solve the sparse path
+  /// refused: then ODE's Dantzig solver).
+  std::uint64_t own_steps = 0;
+  std::uint64_t own_fallbacks = 0;
   /// Distinct obstacles in contact with the rover at the start of the last step (not a count).
   int obstacles_touched = 0;
   /// Solves can take the sparse path: SimOptions::sparse_lcp and the solver hook works in this

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "ernest/dynamics/island_step.hpp"
 #include "ernest/dynamics/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
 #include "ernest/dynamics/ode_lcp.hpp"
 #include "ernest/dynamics/row_guess.hpp"
@@ -243,6 +244,9 @@ struct RoverData {
   std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
   std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
   detail::LcpWorkspace lcp;  // the sparse constraint solves (ode_lcp.hpp)
+  // Our own step (SimOptions::stepper == Own): the bodies, permanent joints (bound by build())
+  // and the attempt's contacts and linear motors, recorded instead of created in ODE.
+  detail::IslandStep island;
   SolverStats stats{};
 };
 
@@ -318,6 +322,10 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   double soil_terms_gap(int wheel, double end_slip);
   void end_velocity(int wheel, double& vx, double& vcx) const;
   void soil_levels(int wheel);
+  // The attempt's joints: recorded for our own step, or created in ODE (`contacts` group).
+  void add_contact_joint(const dContact& c, dBodyID b1, dBodyID b2, dJointFeedback* fb);
+  void add_lmotor_joint(dBodyID b, const Vec3& axis, double fmax, double cfm);
+  void world_step();  // one attempt: our island step, or dWorldStep (and ODE's joints)
   bool solve_rows(detail::RowStates& guess, detail::RowStates& next, detail::RowStates& tried,
                   int& attempts);
   void emit_obstacles(detail::RowModes modes);

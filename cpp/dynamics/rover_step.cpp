@@ -199,7 +199,7 @@ bool RoverSim::Impl::solve_rows(RowStates& guess, RowStates& next, RowStates& tr
     if (attempts++ > 0) restore_bodies();
     tried = guess;
     emit(RowModes::guess(guess));
-    dWorldStep(world, h);
+    world_step();
     held = settle(RowModes::guess(guess), next);
     dJointGroupEmpty(contacts);
     if (held) {
@@ -213,11 +213,59 @@ bool RoverSim::Impl::solve_rows(RowStates& guess, RowStates& next, RowStates& tr
     if (attempts++ > 0) restore_bodies();
     obstacle_try.fill(RowState::Bounded);
     emit(RowModes::all_bounded());
-    dWorldStep(world, h);
+    world_step();
     settle(RowModes::all_bounded(), next);
     dJointGroupEmpty(contacts);
   }
   return held;
+}
+
+void RoverSim::Impl::add_contact_joint(const dContact& c, dBodyID b1, dBodyID b2,
+                                       dJointFeedback* fb) {
+  if (opt.stepper == Stepper::Own) {
+    island.add_contact(c, b1, b2, fb);
+    return;
+  }
+  dJointID j = dJointCreateContact(world, contacts, &c);
+  dJointAttach(j, b1, b2);
+  if (fb) dJointSetFeedback(j, fb);
+}
+
+void RoverSim::Impl::add_lmotor_joint(dBodyID b, const Vec3& axis, double fmax, double cfm) {
+  if (opt.stepper == Stepper::Own) {
+    const double a[3] = {axis.x(), axis.y(), axis.z()};
+    island.add_lmotor(b, a, 0.0, fmax, cfm);
+    return;
+  }
+  dJointID lm = dJointCreateLMotor(world, contacts);
+  dJointAttach(lm, b, nullptr);
+  dJointSetLMotorNumAxes(lm, 1);
+  dJointSetLMotorAxis(lm, 0, 0, axis.x(), axis.y(), axis.z());
+  dJointSetLMotorParam(lm, dParamVel, 0.0);
+  dJointSetLMotorParam(lm, dParamFMax, fmax);
+  dJointSetLMotorParam(lm, dParamCFM, cfm);
+}
+
+// One attempt's step of the bodies. Own: our island step (island_step.hpp); where it does not
+// reproduce dWorldStep it changes nothing, and the attempt's joints are created in ODE for
+// dWorldStep (with the sparse path off when our solve already found it cannot: ODE's Dantzig
+// solver then, as the hook would have gone).
+void RoverSim::Impl::world_step() {
+  if (opt.stepper != Stepper::Own) {
+    dWorldStep(world, h);
+    return;
+  }
+  const detail::IslandStep::Outcome r = island.step(world, h, lcp);
+  if (r == detail::IslandStep::Outcome::Stepped) {
+    ++stats.own_steps;
+    return;
+  }
+  ++stats.own_fallbacks;
+  island.materialise(world, contacts);
+  const bool enabled = lcp.enabled;
+  if (r == detail::IslandStep::Outcome::SolveRefused) lcp.enabled = false;
+  dWorldStep(world, h);
+  lcp.enabled = enabled;
 }
 
 void RoverSim::Impl::step_once() {

@@ -98,6 +98,10 @@ class GroundType(Enum):
     Soil = 0
     Rigid = 1
 
+class Stepper(Enum):
+    Ode = 0
+    Own = 1
+
 class ActuatorMode(Enum):
     Velocity = 0
     Torque = 1
@@ -124,6 +128,7 @@ class SimOptions:
     guess_active_set: bool
     guess_obstacle_contacts: bool
     sparse_lcp: bool
+    stepper: Stepper
     max_speed: float
     max_angular_speed: float
     slip_force_tolerance: float
@@ -146,6 +151,8 @@ class SolverStats:
     obstacle_bounded: int
     obstacle_explicit: int
     obstacle_implicit: int
+    own_steps: int
+    own_fallbacks: int
     obstacles_touched: int
     fast_lcp: bool
 

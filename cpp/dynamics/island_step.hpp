@@ -1,0 +1,120 @@
+// Our own step of the rover's island: what ODE 0.16's dWorldStep (ode/src/step.cpp, dxStepIsland)
+// computes for the rover's six bodies and the joint types it uses, built for this structure and
+// solved through the sparse solver (solve_sparse, ode_lcp.hpp) directly (internal to cpp/dynamics).
+//
+// Why (benchmarks/RESULTS.md, "Session 11: our own island step"): a time profile put ODE's own
+// part of dWorldStep at ~45 % of a step on flat soil, of which forming A = J M⁻¹ Jᵀ joint pair by
+// joint pair in scalar code alone was 15 %; ODE also rebuilds J, A and the right-hand side for
+// every attempt of a step (implicit-slip re-solves, guess retries) though J and M are the same.
+// Here A is formed body by body (the rows touching a body, M⁻¹ Jᵀ once per row and side), and the
+// attempt's joints are recorded instead of created as ODE joints.
+//
+// ODE stays the source of truth: bodies, masses, the permanent joints' anchors, axes, parameters
+// and stops (public getters), and dWorldStep is the reference and the fallback. Anything this
+// step does not reproduce exactly (another joint type, a joint option it does not know, a body
+// outside the rover, a problem the sparse solver refuses) makes step() return false without
+// touching ODE: the caller then materialises the recorded joints and calls dWorldStep.
+#pragma once
+
+#include <ode/ode.h>
+
+#include <array>
+#include <cstdint>
+
+#include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/dynamics/sparse_ldlt.hpp"
+
+namespace ernest::dynamics::detail {
+
+class IslandStep {
+ public:
+  static constexpr int kBodies = 6;
+  static constexpr int kMaxRows = LdltPlan::kMaxRows;
+  static constexpr int kMaxAttemptJoints = 96;  // contacts and linear motors of one attempt
+  static constexpr int kMaxJoints = 16 + kMaxAttemptJoints;
+
+  /// The bodies (all of the world's) and the permanent joints between them. Hinges' second
+  /// axes are captured in body 2's frame as dJointSetHingeAxis stored them (ODE has no getter):
+  /// call right after the hinges are set up, with the bodies where they were then.
+  void bind(const std::array<dBodyID, kBodies>& bodies);
+  void add_hinge(dJointID j, const dReal axis_world[3]);
+  void add_universal(dJointID j);
+  void add_amotor(dJointID j);
+
+  /// This attempt's own joints: recorded here instead of created in ODE (clear: none).
+  void clear_attempt() { n_attempt_ = 0; }
+  /// A contact as dJointCreateContact + dJointAttach(b1, b2) + dJointSetFeedback(fb) would make.
+  void add_contact(const dContact& c, dBodyID b1, dBodyID b2, dJointFeedback* fb);
+  /// A one-axis linear motor (axis global, rel 0) on body b alone, as dJointCreateLMotor with
+  /// dParamVel, dParamFMax, dParamCFM would make.
+  void add_lmotor(dBodyID b, const double axis[3], double vel, double fmax, double cfm);
+  /// Creates the recorded joints in ODE (in `group`), for dWorldStep to take this attempt.
+  void materialise(dWorldID world, dJointGroupID group) const;
+
+  /// One step of length h of the island. Anything but Stepped: nothing in ODE changed, and
+  /// dWorldStep must take the step (after materialise()); SolveRefused: solve_sparse was tried
+  /// on this very problem and refused it (ODE's Dantzig solver must solve it).
+  enum class Outcome { Stepped, Unsupported, SolveRefused };
+  Outcome step(dWorldID world, double h, LcpWorkspace& ws);
+
+ private:
+  enum class Kind : std::int8_t { Hinge, Universal, AMotor, Contact, LMotor };
+  struct Joint {
+    Kind kind = Kind::Hinge;
+    dJointID id = nullptr;        // permanent joints
+    int a = -1, b = -1;           // body indices (b = -1: the world)
+    dJointFeedback* fb = nullptr;
+    dReal axis2[4]{};             // hinge: axis in body b's frame (ODE's axis2)
+    dContact contact{};           // contact
+    double lm_axis[3]{}, lm_vel = 0.0, lm_fmax = 0.0, lm_cfm = 0.0;  // linear motor
+    int first = 0, rows = 0;      // this step's rows
+    int row_a = -1, row_b = -1;   // this step's bodies of the rows (a contact on (0, b): b first)
+  };
+  struct BodyState {
+    const dReal *pos, *R, *q, *lvel, *avel, *facc, *tacc;
+    dReal invI[12];      // world frame (3x4, ODE's layout)
+    dReal facc_g[3];     // force accumulator plus gravity
+    dReal tacc_g[3];     // torque accumulator plus the gyroscopic torque
+    double inv_mass;
+  };
+  int body_index(dBodyID b) const;
+  bool add_rows(Joint& jt, double fps, double erp);
+  bool hinge_rows(Joint& jt, double fps, double erp);
+  bool universal_rows(Joint& jt, double fps, double erp);
+  bool amotor_rows(Joint& jt);
+  bool contact_rows(Joint& jt, double fps, double erp);
+  bool lmotor_rows(Joint& jt);
+  int new_row(Joint& jt, double world_cfm);
+  void build_a(int m, double h);
+  void integrate(double h);
+
+  std::array<dBodyID, kBodies> body_{};
+  std::array<double, kBodies> mass_{};
+  std::array<std::array<dReal, 12>, kBodies> inv_inertia_body_{};  // 3x4
+  std::array<std::array<dReal, 12>, kBodies> inertia_body_{};
+  std::array<Joint, 16> permanent_{};
+  int n_permanent_ = 0;
+  std::array<Joint, kMaxAttemptJoints> attempt_{};
+  int n_attempt_ = 0;
+
+  // ---- this step's working data (preallocated)
+  std::array<BodyState, kBodies> bs_{};
+  std::array<Joint*, kMaxJoints> order_{};
+  int n_order_ = 0;
+  int m_ = 0;
+  double world_cfm_ = 0.0, min_depth_ = 0.0, max_vel_ = 0.0;  // dWorldGet*
+  // Per row: the Jacobian for body a then body b (lin, ang each), M⁻¹ Jᵀ likewise, the body
+  // indices, and the LCP data in ODE's interleaved layout (rhs, lambda) and (lo, hi).
+  std::array<std::array<double, 12>, kMaxRows> j_{}, jm_{};
+  std::array<int, kMaxRows> ra_{}, rb_{};
+  std::array<double, 2 * kMaxRows> bx_{}, lh_{};
+  std::array<double, kMaxRows> cfm_{};
+  std::array<int, kMaxRows> findex_{};
+  std::array<double, kMaxRows * kMaxRows> a_{};
+  // build_a's per-body gather: the Jacobians on the body, column by column, and their sides
+  std::array<std::array<double, kMaxRows>, 6> jb_{};
+  std::array<int, kMaxRows> side_{};
+  std::array<std::array<double, 6>, kBodies> cforce_{};
+};
+
+}  // namespace ernest::dynamics::detail
