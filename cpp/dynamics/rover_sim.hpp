@@ -117,12 +117,13 @@ struct SimOptions {
   /// and dt/8 (benchmarks/RESULTS.md, "One substep at every step size"). n > 1 substeps every
   /// obstacle step (the pre-session-9 behaviour with 8; comparisons).
   int obstacle_substeps = 1;
-  /// Who steps the bodies: ODE's dWorldStep, or our own island step that reproduces it for the
-  /// rover's bodies and joints (cpp/dynamics/island_step.hpp; agreement to ~1e-10 per step,
-  /// benchmarks/RESULTS.md "Session 11: our own island step"). Own falls back to dWorldStep for
-  /// any step it does not reproduce (a joint option it does not know, a solve the sparse path
-  /// refuses), so the two differ by rounding only.
-  Stepper stepper = Stepper::Ode;
+  /// Who steps the bodies: our own island step that reproduces ODE's dWorldStep for the rover's
+  /// bodies and joints (cpp/dynamics/island_step.hpp; ~10 % faster a step, the same step to
+  /// ~1e-15 m from the same state: benchmarks/RESULTS.md "Session 11: our own island step"), or
+  /// dWorldStep itself. Own falls back to dWorldStep for any attempt it does not reproduce (a
+  /// joint option it does not know, a solve the sparse path refuses), so the two differ by
+  /// rounding only.
+  Stepper stepper = Stepper::Own;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
   void validate() const;

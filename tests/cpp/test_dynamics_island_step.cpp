@@ -83,8 +83,8 @@ constexpr double kStateTol = 1e-9;   // relative (forces of ~100 N are 1e-9 rela
 
 }  // namespace
 
-TEST(IslandStep, OptionDefaultsToOdeAndIsValidated) {
-  EXPECT_EQ(SimOptions{}.stepper, Stepper::Ode);
+TEST(IslandStep, OptionDefaultsToOwnAndIsValidated) {
+  EXPECT_EQ(SimOptions{}.stepper, Stepper::Own);
   SimOptions o;
   o.stepper = static_cast<Stepper>(7);
   EXPECT_THROW(o.validate(), std::invalid_argument);

@@ -8,8 +8,9 @@
 // Release build `./run test` makes (g++ -O3 of Debian 12, -fno-math-errno -fno-trapping-math) and
 // for its ASan + UBSan build (checked: the same bits). A change that is meant to change the physics
 // (or a new toolchain) re-pins: run this test, check the trajectories' physics with the other
-// dynamics tests, and copy the printed hashes into kPinned below, saying why in the commit and
-// above kPinned (the last re-pin: session 10, SparseLdlt's own dense kernel instead of ODE's).
+// dynamics tests, and copy the printed hashes into kPinnedOwn / kPinnedOde below, saying why in the commit and
+// above the pins (the last: session 11, our own island step as the default stepper; each
+// scenario is pinned on both steppers, Own and ODE's dWorldStep).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,6 +18,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "ernest/dynamics/batch_stepper.hpp"
@@ -81,16 +83,22 @@ std::vector<BoxObstacle> rocks() {
   return boxes;
 }
 
-std::uint64_t flat_m90() {
-  RoverSim sim(RoverParameters{}, HeightMap::flat(12, 10, 0.25));
+SimOptions with(Stepper stepper) {
+  SimOptions o;
+  o.stepper = stepper;
+  return o;
+}
+
+std::uint64_t flat_m90(Stepper stepper) {
+  RoverSim sim(RoverParameters{}, HeightMap::flat(12, 10, 0.25), {}, with(stepper));
   sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.1);
   Hash h;
   run(sim, 0, 400, h);
   return h.h;
 }
 
-std::uint64_t rock_field(int& touching) {
-  SimOptions o;
+std::uint64_t rock_field(Stepper stepper, int& touching) {
+  SimOptions o = with(stepper);
   o.seed = 5;  // the friction draw
   RoverSim sim(RoverParameters{}, HeightMap::flat(12, 10, 0.25), rocks(), o);
   sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.15);
@@ -99,12 +107,13 @@ std::uint64_t rock_field(int& touching) {
   return h.h;
 }
 
-std::uint64_t slope() {  // 12 deg of M90 uphill, and rigid ground's own rows on 10 deg
+std::uint64_t slope(Stepper stepper) {  // 12 deg of M90 uphill, and rigid ground on 10 deg
   Hash h;
-  RoverSim soil(RoverParameters{}, HeightMap::slope(12.0 * M_PI / 180.0, 30, 10, 0.25, -15, -5));
+  RoverSim soil(RoverParameters{}, HeightMap::slope(12.0 * M_PI / 180.0, 30, 10, 0.25, -15, -5),
+                {}, with(stepper));
   soil.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.1);
   run(soil, 0, 300, h);
-  SimOptions o;
+  SimOptions o = with(stepper);
   o.ground = GroundType::Rigid;
   o.friction = 0.7;
   RoverSim rigid(RoverParameters{}, HeightMap::slope(10.0 * M_PI / 180.0, 30, 10, 0.25, -15, -5),
@@ -114,10 +123,10 @@ std::uint64_t slope() {  // 12 deg of M90 uphill, and rigid ground's own rows on
   return h.h;
 }
 
-std::uint64_t batch() {  // three rovers on two threads, four steps per call
+std::uint64_t batch(Stepper who) {  // three rovers on two threads, four steps per call
   std::vector<std::shared_ptr<RoverSim>> sims;
   for (int i = 0; i < 3; ++i) {
-    SimOptions o;
+    SimOptions o = with(who);
     o.seed = 20 + i;
     sims.push_back(std::make_shared<RoverSim>(RoverParameters{}, HeightMap::flat(12, 10, 0.25),
                                               i == 1 ? std::vector<BoxObstacle>{} : rocks(), o));
@@ -143,8 +152,8 @@ std::uint64_t batch() {  // three rovers on two threads, four steps per call
 }
 
 // 150 steps, a snapshot, 150 more; restored, the same 150 again: the restored run repeats them.
-std::uint64_t snapshot_restore() {
-  SimOptions o;
+std::uint64_t snapshot_restore(Stepper stepper) {
+  SimOptions o = with(stepper);
   o.seed = 9;
   RoverSim sim(RoverParameters{}, HeightMap::flat(12, 10, 0.25), rocks(), o);
   sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.15);
@@ -188,11 +197,18 @@ std::uint64_t snapshot_restore() {
 // and levels within slip_force_tolerance, so a different start accepts a different point within
 // it: every soil trajectory moves at rounding-to-tolerance level (one step from the same state
 // with and without: <= 3e-4 m/s, test_dynamics_slip WarmStartSavesSolvesAndKeepsTheStep).
+// Session 11: SimOptions::stepper's default became Own (our own island step,
+// cpp/dynamics/island_step.hpp), which forms A = J M⁻¹ Jᵀ body by body where ODE sums it joint
+// pair by joint pair: the same step to rounding (test_dynamics_island_step: ~1e-15 m per step from
+// the same state), other last bits, so all five were pinned for Own (kPinnedOwn). The Ode path
+// (dWorldStep) keeps the session-10 pins (kPinnedOde), unchanged: nothing on it moved.
 struct Pinned {
   std::uint64_t flat_m90, rock_field, slope, batch, snapshot_restore;
 };
-constexpr Pinned kPinned{0x6e9b20ecdb9723ddull, 0xd9c34ab7c133969eull, 0x2deb6a8f8f8e4976ull,
-                         0xdc06c50cfd86400bull, 0x6da0a47deb573da4ull};
+constexpr Pinned kPinnedOde{0x6e9b20ecdb9723ddull, 0xd9c34ab7c133969eull, 0x2deb6a8f8f8e4976ull,
+                            0xdc06c50cfd86400bull, 0x6da0a47deb573da4ull};
+constexpr Pinned kPinnedOwn{0x99302755834fb1ffull, 0x90e13077536399faull, 0xe8dce32c749cf013ull,
+                            0x93dfc69f6efc7079ull, 0x556e38d413ba4ce1ull};
 
 void expect_pinned(const char* name, std::uint64_t got, std::uint64_t pinned) {
   EXPECT_EQ(got, pinned) << name << ": the trajectory's bits changed; if the change is meant "
@@ -202,24 +218,39 @@ void expect_pinned(const char* name, std::uint64_t got, std::uint64_t pinned) {
 
 }  // namespace
 
-TEST(TrajectoryHash, FlatM90) { expect_pinned("flat_m90", flat_m90(), kPinned.flat_m90); }
+// Each pinned scenario on both steppers: the default (Own) and ODE's dWorldStep.
+class TrajectoryHash : public ::testing::TestWithParam<Stepper> {
+ protected:
+  const Pinned& pinned() const { return GetParam() == Stepper::Own ? kPinnedOwn : kPinnedOde; }
+};
 
-TEST(TrajectoryHash, RockFieldWithBoxesTouched) {
+INSTANTIATE_TEST_SUITE_P(Steppers, TrajectoryHash, ::testing::Values(Stepper::Own, Stepper::Ode),
+                         [](const ::testing::TestParamInfo<Stepper>& i) {
+                           return std::string(i.param == Stepper::Own ? "Own" : "Ode");
+                         });
+
+TEST_P(TrajectoryHash, FlatM90) {
+  expect_pinned("flat_m90", flat_m90(GetParam()), pinned().flat_m90);
+}
+
+TEST_P(TrajectoryHash, RockFieldWithBoxesTouched) {
   int touching = 0;
-  const std::uint64_t h = rock_field(touching);
+  const std::uint64_t h = rock_field(GetParam(), touching);
   EXPECT_GE(touching, 50) << "the rocks must be touched for the hash to cover their contacts";
-  expect_pinned("rock_field", h, kPinned.rock_field);
+  expect_pinned("rock_field", h, pinned().rock_field);
 }
 
-TEST(TrajectoryHash, SoilAndRigidSlopes) { expect_pinned("slope", slope(), kPinned.slope); }
-
-TEST(TrajectoryHash, BatchStepper) { expect_pinned("batch", batch(), kPinned.batch); }
-
-TEST(TrajectoryHash, SnapshotRestore) {
-  expect_pinned("snapshot_restore", snapshot_restore(), kPinned.snapshot_restore);
+TEST_P(TrajectoryHash, SoilAndRigidSlopes) {
+  expect_pinned("slope", slope(GetParam()), pinned().slope);
 }
 
-TEST(TrajectoryHash, OneUlpChangesTheHash) {
+TEST_P(TrajectoryHash, BatchStepper) { expect_pinned("batch", batch(GetParam()), pinned().batch); }
+
+TEST_P(TrajectoryHash, SnapshotRestore) {
+  expect_pinned("snapshot_restore", snapshot_restore(GetParam()), pinned().snapshot_restore);
+}
+
+TEST(TrajectoryHashSensitivity, OneUlpChangesTheHash) {
   // The hash is sensitive to the last bit: one ulp on one coordinate of the start state changes
   // it (the perturbation grows through the dynamics, and its own bits are hashed at once).
   const auto hash_from = [](bool perturb) {
