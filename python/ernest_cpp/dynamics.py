@@ -33,6 +33,7 @@ from ._core.dynamics import (  # noqa: F401  (re-exports)
     RoverSim,
     RoverState,
     SimOptions,
+    Stepper,
     SimulationDiverged,
     Snapshot,
     SolverStats,
@@ -151,7 +152,8 @@ __all__ = [
     "COMMAND_NAMES", "COMMAND_SIZE", "STATE_VECTOR_NAMES", "STATE_VECTOR_SIZE", "WHEELS",
     "ActuatorMode", "BatchStepper", "BoxObstacle", "ClutchState", "Commands", "GroundType",
     "HeightMap", "MotorElectrical", "MotorParameters", "RoverParameters", "RoverSim", "RoverState",
-    "SimOptions", "SimulationDiverged", "Snapshot", "SolverStats", "WheelSyncResult", "command_array",
+    "SimOptions", "SimulationDiverged", "Snapshot", "SolverStats", "Stepper", "WheelSyncResult",
+    "command_array",
     "fast_lcp_active", "make_options", "make_sim", "motor_electrical", "rock_field", "sync_commands",
     "synchronise_wheels", "wheel_jacobian",
 ]
