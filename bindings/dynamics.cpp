@@ -312,8 +312,9 @@ void bind_dynamics(py::module_& m) {
       .def_readonly("obstacles_touched", &SolverStats::obstacles_touched,
                     "distinct obstacles in contact at the start of the last step")
       .def_readonly("fast_lcp", &SolverStats::fast_lcp,
-                    "solves can take the sparse path: SimOptions.sparse_lcp and the solver hook "
-                    "works in this process (fast_lcp_active()); False: all are ODE's")
+                    "solves can take the sparse path: SimOptions.sparse_lcp, and the own island "
+                    "step (SimOptions.stepper = Own) or the solver hook works in this process "
+                    "(fast_lcp_active()); False: all are ODE's")
       .def("__repr__", [](const SolverStats& s) {
         return "SolverStats(steps=" + std::to_string(s.steps) + ", first_guess=" +
                std::to_string(s.first_guess) + ", later_guess=" + std::to_string(s.later_guess) +

@@ -407,6 +407,7 @@ bool IslandStep::add_rows(Joint& jt, double fps, double erp) {
   jt.rows = 0;
   jt.row_a = jt.a;
   jt.row_b = jt.b;
+  if (jt.id != nullptr && !dJointIsEnabled(jt.id)) return false;  // (ODE leaves it out)
   switch (jt.kind) {
     case Kind::Hinge: return hinge_rows(jt, fps, erp);
     case Kind::Universal: return universal_rows(jt, fps, erp);

@@ -210,7 +210,9 @@ RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
 void RoverSim::Impl::build() {
   init_ode_once();
   // find ODE's own solver now (throws here, not inside a step); warns once if the hook is off
-  stats.fast_lcp = opt.sparse_lcp && detail::sparse_lcp_active();
+  // (our own island step calls the sparse solver itself: it needs no hook)
+  const bool hook = detail::sparse_lcp_active();
+  stats.fast_lcp = opt.sparse_lcp && (hook || opt.stepper == Stepper::Own);
   lcp.enabled = opt.sparse_lcp;
   world = dWorldCreate();
   // ODE's default step threading implementation is one object shared by every world and is not

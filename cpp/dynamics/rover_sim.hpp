@@ -234,9 +234,11 @@ struct SolverStats {
   std::uint64_t own_fallbacks = 0;
   /// Distinct obstacles in contact with the rover at the start of the last step (not a count).
   int obstacles_touched = 0;
-  /// Solves can take the sparse path: SimOptions::sparse_lcp and the solver hook works in this
-  /// process (fast_lcp_active(), ode_init.hpp). False: every solve is ODE's, friction
-  /// bounded by its approximation (no solve_coulomb).
+  /// Solves can take the sparse path: SimOptions::sparse_lcp, and our own island step
+  /// (SimOptions::stepper = Own, which calls the sparse solver itself) or the solver hook works in
+  /// this process (fast_lcp_active(), ode_init.hpp). False: every solve is ODE's, friction
+  /// bounded by its approximation (no solve_coulomb). With Own and the hook off, the attempts
+  /// handed to dWorldStep (own_fallbacks) are ODE's solver's, without solve_coulomb.
   bool fast_lcp = false;
 };
 

@@ -28,7 +28,8 @@ TEST(SolverHookOff, ProbeReportsItWarnsOnceAndOdeSolvesEveryStep) {
 
   testing::internal::CaptureStderr();
   EXPECT_FALSE(fast_lcp_active());
-  SimOptions o;  // sparse_lcp asked for, but not available
+  SimOptions o;  // sparse_lcp asked for, but not available through dWorldStep
+  o.stepper = Stepper::Ode;
   auto sim = std::make_unique<RoverSim>(RoverParameters{}, HeightMap::flat(8, 8, 0.25),
                                         std::vector<BoxObstacle>{}, o);
   sim->reset(0.0, 0.0, 0.0);
@@ -40,4 +41,17 @@ TEST(SolverHookOff, ProbeReportsItWarnsOnceAndOdeSolvesEveryStep) {
   EXPECT_EQ(s.sparse_solves, 0u);
   EXPECT_EQ(s.dense_solves, 0u);  // not even counted: ODE's calls never reach ode_lcp.cpp
   EXPECT_TRUE(std::isfinite(sim->state().position.z()));
+
+  // Our own island step (the default stepper) calls the sparse solver itself: it needs no hook.
+  o.stepper = Stepper::Own;
+  auto own = std::make_unique<RoverSim>(RoverParameters{}, HeightMap::flat(8, 8, 0.25),
+                                        std::vector<BoxObstacle>{}, o);
+  own->reset(0.0, 0.0, 0.0);
+  own->step_n(8);
+  const SolverStats& t = own->solver_stats();
+  EXPECT_TRUE(t.fast_lcp);
+  EXPECT_GE(t.sparse_solves, 8u);
+  EXPECT_EQ(t.own_steps, t.sparse_solves);
+  EXPECT_EQ(t.dense_solves, 0u);
+  EXPECT_NEAR(own->state().position.z(), sim->state().position.z(), 1e-9);
 }
