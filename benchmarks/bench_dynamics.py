@@ -10,7 +10,8 @@ Our default (SimOptions.obstacle_substeps = 1 since session 9) takes a step touc
 one step, split into up to 8 substeps only after a step in which a wheel's slip grew fast (a
 wheel surging up a rock face: obstacle_contacts.cpp); before session 9 every such step was 8
 substeps. The rock scenarios are timed with the default (what training runs) and with the old
-8 substeps, for comparison.
+8 substeps, for comparison. Since session 11 the default steps the bodies with our own island
+step (SimOptions.stepper = Own); every scenario is also timed with ODE's dWorldStep (Ode).
 
     pip install mujoco          (benchmark-only extra: pip install '.[bench]')
     ./run bench dynamics        (runs bench_dynamics.cpp, then this script)
@@ -99,9 +100,9 @@ def mjcf(p: D.RoverParameters, dt: float, boxes) -> str:
 </mujoco>"""
 
 
-def ours(boxes, substeps: int):
+def ours(boxes, substeps: int, stepper=None):
     """Our rover on M90 with these rocks, rolling at SPEED after 50 steps: (sim, start snapshot)."""
-    sim = rolling_rover(boxes, SPEED, substeps)
+    sim = rolling_rover(boxes, SPEED, substeps, stepper=stepper)
     sim.step_n(50)
     return sim, sim.snapshot()
 
@@ -155,6 +156,7 @@ def main():
         for sub in ((DEFAULT_SUBSTEPS, OTHER_SUBSTEPS) if n else (DEFAULT_SUBSTEPS,)):
             sim, start = ours(boxes, sub)
             runs[(name, sub)] = (sim, start)
+        runs[(name, "ode")] = ours(boxes, DEFAULT_SUBSTEPS, D.Stepper.Ode)
     t = {k: [] for k in runs}
     travelled = {}
     for _ in range(repeats):
@@ -183,13 +185,14 @@ def main():
           f"interleaved repeats, driving {SPEED} m/s")
     print(f"| scenario | MuJoCo us/step | ours us/step, default ({DEFAULT_SUBSTEPS} obstacle substep(s)) | "
           f"ratio | ours us/step, {OTHER_SUBSTEPS} obstacle substep(s) | ratio | "
-          "travelled ours / MuJoCo [m] |")
-    print("|---|---|---|---|---|---|---|")
+          "ours us/step, ODE's dWorldStep | ratio | travelled ours / MuJoCo [m] |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for name, n in SCENARIOS.items():
         on = f"{med[(name, DEFAULT_SUBSTEPS)]:.2f} | **{ratio(name, DEFAULT_SUBSTEPS):.2f}**"
         off = (f"{med[(name, OTHER_SUBSTEPS)]:.2f} | {ratio(name, OTHER_SUBSTEPS):.2f}" if n
                else "(no rocks: same) | —")
-        print(f"| {name} | {med[(name, 'mujoco')]:.2f} | {on} | {off} | "
+        ode = f"{med[(name, 'ode')]:.2f} | {ratio(name, 'ode'):.2f}"
+        print(f"| {name} | {med[(name, 'mujoco')]:.2f} | {on} | {off} | {ode} | "
               f"{travelled[(name, DEFAULT_SUBSTEPS)]:.2f} / {travelled[(name, 'mujoco')]:.2f} |")
     print("ratio = ours / MuJoCo, median of the per-repeat ratios (target <= 1.0)")
     return 0

@@ -16,10 +16,12 @@ def median_us(fn, per, repeats=9):
     return statistics.median(times)
 
 
-def rolling_rover(obstacles=(), speed=0.15, substeps=None, guess_obstacles=True, slip_warm_start=True):
+def rolling_rover(obstacles=(), speed=0.15, substeps=None, guess_obstacles=True, slip_warm_start=True,
+                  stepper=None):
     """A rover on flat M90 (friction 0.8 on the rocks) with these box obstacles, started rolling at
     ``speed`` [m/s] with its wheels commanded to it (gimbal free): the driving runs of the
-    dynamics benchmarks. ``substeps``: SimOptions.obstacle_substeps (None: its default)."""
+    dynamics benchmarks. ``substeps``: SimOptions.obstacle_substeps, ``stepper``:
+    SimOptions.stepper (None: their defaults)."""
     from ernest_cpp import dynamics as D
 
     o = D.make_options("soil", friction=0.8)
@@ -27,6 +29,8 @@ def rolling_rover(obstacles=(), speed=0.15, substeps=None, guess_obstacles=True,
         o.obstacle_substeps = substeps
     o.guess_obstacle_contacts = guess_obstacles
     o.slip_warm_start = slip_warm_start
+    if stepper is not None:
+        o.stepper = stepper
     sim = D.make_sim(obstacles=list(obstacles), options=o)
     sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, speed)
     c = D.Commands()

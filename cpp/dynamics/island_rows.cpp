@@ -146,23 +146,6 @@ void IslandStep::materialise(dWorldID world, dJointGroupID group) const {
   }
 }
 
-// A new row of joint jt, as dxStepIsland_Stage2a initialises it: J zero, rhs 0, the world's CFM,
-// no bounds, no friction index. -1: too many rows.
-int IslandStep::new_row(Joint& jt, double world_cfm) {  // (world_cfm_)
-  if (m_ >= kMaxRows) return -1;
-  const int r = m_++;
-  j_[r].fill(0.0);
-  ra_[r] = jt.row_a;
-  rb_[r] = jt.row_b;
-  bx_[2 * r] = 0.0;
-  cfm_[r] = world_cfm;
-  lh_[2 * r] = -kInf;
-  lh_[2 * r + 1] = kInf;
-  findex_[r] = -1;
-  ++jt.rows;
-  return r;
-}
-
 // setBall (joint.cpp): three rows holding the anchors together, J1 = [I, -[a1]x],
 // J2 = [-I, [a2]x], rhs = erp fps (anchor2 - anchor1).
 static void ball_rows(double (*J[3]), double* rhs[3], const dReal* p1, const dReal* p2,

@@ -80,6 +80,7 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
   // ---- stage 2a: the rows, joints ordered as ODE's (purely unbounded joints first: nub rows)
   m_ = 0;
   n_order_ = 0;
+  n_body_rows_.fill(0);
   int nub = 0;
   for (Kind kind : {Kind::Hinge, Kind::Universal, Kind::AMotor}) {
     for (int k = 0; k < n_permanent_; ++k) {
@@ -181,14 +182,12 @@ void IslandStep::build_a(int m, double h) {
   std::array<int, kMaxRows> rows;
   std::array<double, kMaxRows> dot;
   for (int b = 0; b < kBodies; ++b) {
-    int n = 0;
-    for (int r = 0; r < m; ++r) {
-      const int side = ra_[r] == b ? 0 : rb_[r] == b ? 1 : -1;
-      if (side < 0) continue;
-      rows[n] = r;
-      side_[n] = side;
-      for (int c = 0; c < 6; ++c) jb_[c][n] = j_[r][6 * side + c];
-      ++n;
+    const int n = n_body_rows_[b];
+    for (int k = 0; k < n; ++k) {
+      const int r = body_rows_[b][k] >> 1, side = body_rows_[b][k] & 1;
+      rows[k] = r;
+      side_[k] = side;
+      for (int c = 0; c < 6; ++c) jb_[c][k] = j_[r][6 * side + c];
     }
     for (int p = 0; p < n; ++p) {
       const double* jm = &jm_[rows[p]][6 * side_[p]];

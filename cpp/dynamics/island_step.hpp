@@ -20,6 +20,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "ernest/dynamics/ode_lcp.hpp"
 #include "ernest/dynamics/sparse_ldlt.hpp"
@@ -32,6 +33,7 @@ class IslandStep {
   static constexpr int kMaxRows = LdltPlan::kMaxRows;
   static constexpr int kMaxAttemptJoints = 96;  // contacts and linear motors of one attempt
   static constexpr int kMaxJoints = 16 + kMaxAttemptJoints;
+  static constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
   /// The bodies (all of the world's) and the permanent joints between them. Hinges' second
   /// axes are captured in body 2's frame as dJointSetHingeAxis stored them (ODE has no getter):
@@ -84,7 +86,25 @@ class IslandStep {
   bool amotor_rows(Joint& jt);
   bool contact_rows(Joint& jt, double fps, double erp);
   bool lmotor_rows(Joint& jt);
-  int new_row(Joint& jt, double world_cfm);
+  // A new row of joint jt, as dxStepIsland_Stage2a initialises it: J zero, rhs 0, the world's
+  // CFM, no bounds, no friction index; listed under its bodies (build_a). -1: too many rows.
+  int new_row(Joint& jt, double world_cfm) {
+    if (m_ >= kMaxRows) return -1;
+    const int r = m_++;
+    j_[r].fill(0.0);
+    ra_[r] = jt.row_a;
+    rb_[r] = jt.row_b;
+    body_rows_[jt.row_a][n_body_rows_[jt.row_a]++] = static_cast<std::int16_t>(2 * r);
+    if (jt.row_b >= 0)
+      body_rows_[jt.row_b][n_body_rows_[jt.row_b]++] = static_cast<std::int16_t>(2 * r + 1);
+    bx_[2 * r] = 0.0;
+    cfm_[r] = world_cfm;
+    lh_[2 * r] = -kInfinity;
+    lh_[2 * r + 1] = kInfinity;
+    findex_[r] = -1;
+    ++jt.rows;
+    return r;
+  }
   void build_a(int m, double h);
   void integrate(double h);
 
@@ -107,6 +127,9 @@ class IslandStep {
   // indices, and the LCP data in ODE's interleaved layout (rhs, lambda) and (lo, hi).
   std::array<std::array<double, 12>, kMaxRows> j_{}, jm_{};
   std::array<int, kMaxRows> ra_{}, rb_{};
+  // each body's rows in row order, as 2 r + side (side 1: the row's second body)
+  std::array<std::array<std::int16_t, kMaxRows>, kBodies> body_rows_{};
+  std::array<int, kBodies> n_body_rows_{};
   std::array<double, 2 * kMaxRows> bx_{}, lh_{};
   std::array<double, kMaxRows> cfm_{};
   std::array<int, kMaxRows> findex_{};
