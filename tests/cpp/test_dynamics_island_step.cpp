@@ -137,6 +137,8 @@ TEST(IslandStep, GimbalStopsAndDrivesAtTheirLimitsAgree) {
   EXPECT_LE(a.body, kBodyTol);
   EXPECT_LE(a.state, kStateTol);
   EXPECT_GE(std::abs(own.state().gimbal_yaw), p.yaw_limit - 1e-3);  // the stop was reached
+  EXPECT_GT(a.own_steps, 0u);
+  EXPECT_GT(a.fallbacks, 0u);  // attempts pivoted by ODE (every row with its bounds)
 }
 
 TEST(IslandStep, RocksWithObstacleContactsAgree) {
@@ -162,6 +164,7 @@ TEST(IslandStep, RigidGroundAgrees) {
   EXPECT_LE(a.body, kBodyTol);
   EXPECT_LE(a.state, kStateTol);
   EXPECT_GT(a.own_steps, 0u);
+  EXPECT_GT(a.fallbacks, 0u);  // the fallback path ran and agrees too
 }
 
 // Two runs from the same start, each on its own, 400 steps (0.6 m): the distance travelled and
