@@ -5,6 +5,7 @@
 // --toggle-collect=profiled_steps). REPEATS > 1 restores the state after the run-up and runs the
 // STEPS again, as bench_dynamics.py does: long enough for a time profile with
 //   perf record -e cpu-clock -F 20000 -g build/bench/benchmarks/profile_rocks /tmp/rocks20.txt 800 1 1 1 200
+// SKIP steps more of run-up profile a later stretch (e.g. 240: the first rock contact among 20).
 // Prints the solver's counts.
 //   python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt
 //   valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*profiled_steps*' \
@@ -24,7 +25,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [SKIP]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -43,7 +44,7 @@ int main(int argc, char** argv) {
   Commands c;
   for (auto& w : c.wheel_speed) w = speed / sim.parameters().wheel_radius;
   sim.set_commands(c);
-  sim.step_n(50);
+  sim.step_n(50 + (argc < 8 ? 0 : std::atoi(argv[7])));
   const Snapshot start = sim.snapshot();
   const int repeats = argc < 7 ? 1 : std::max(1, std::atoi(argv[6]));
   for (int r = 0; r < repeats; ++r) {
