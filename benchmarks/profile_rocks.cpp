@@ -5,6 +5,7 @@
 // --toggle-collect=profiled_steps). REPEATS > 1 restores the state after the run-up and runs the
 // STEPS again, as bench_dynamics.py does: long enough for a time profile with
 //   perf record -e cpu-clock -F 20000 -g build/bench/benchmarks/profile_rocks /tmp/rocks20.txt 800 1 1 1 200
+// SKIP steps more of run-up profile a later stretch (e.g. 240: the first rock contact among 20).
 // Prints the solver's counts.
 //   python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt
 //   valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*profiled_steps*' \
@@ -25,7 +26,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [stepper ode|own]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [SKIP] [stepper ode|own]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -39,14 +40,14 @@ int main(int argc, char** argv) {
   o.guess_obstacle_contacts = argc < 5 || std::atoi(argv[4]) != 0;
   o.slip_warm_start = argc < 6 || std::atoi(argv[5]) != 0;
   // STEPPER: who steps the bodies (SimOptions::stepper; default: the option's default)
-  if (argc >= 8) o.stepper = std::string(argv[7]) == "own" ? Stepper::Own : Stepper::Ode;
+  if (argc >= 9) o.stepper = std::string(argv[8]) == "own" ? Stepper::Own : Stepper::Ode;
   const double speed = 0.15;
   RoverSim sim(RoverParameters{}, HeightMap::flat(40, 20, 0.25, 0, -10, -10), rocks, o);
   sim.reset(0, 0, 0, 0, 0, speed);
   Commands c;
   for (auto& w : c.wheel_speed) w = speed / sim.parameters().wheel_radius;
   sim.set_commands(c);
-  sim.step_n(50);
+  sim.step_n(50 + (argc < 8 ? 0 : std::atoi(argv[7])));
   const Snapshot start = sim.snapshot();
   const int repeats = argc < 7 ? 1 : std::max(1, std::atoi(argv[6]));
   for (int r = 0; r < repeats; ++r) {

@@ -87,10 +87,10 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
     double* ci = ws.clamped_cols.data() + m * kMax;
     const double scale = (at_lo >> i & 1 ? -1.0 : 1.0) * std::abs(pairslh[2 * i + 1]);
     for (int a = 0; a < nf; ++a) ci[a] = a_at(rows[a], i) * scale;
-    ws.ldlt.solve(ci);
     ++m;
   }
   if (m == 0) return true;
+  ws.ldlt.solve_many(ws.clamped_cols.data(), m, kMax);
   Small g = Small::Identity(nk, nk);
   SmallVec yk(nk);
   for (int p = 0; p < nk; ++p) yk[p] = x[kpos[p]];

@@ -104,8 +104,13 @@ class SparseLdlt {
   bool factor(const LdltPlan& plan, const double* a);
   /// x := A⁻¹ x, x in the numbering of the plan's rows (x[i] belongs to rows[i]).
   void solve(double* x) const;
+  /// solve() of k right-hand sides, column c at x + c * stride: the same bits as k solve() calls,
+  /// faster (up to four solves interleaved: their latency-bound chains overlap).
+  void solve_many(double* x, int k, int stride) const;
 
  private:
+  template <int K>
+  void solve_k(double* const* xs) const;
   bool factor_column(int k);
   bool factor_supernode(int k0, int width);
   static void fill(const LdltPlan& plan, const double* a, double* w);
@@ -115,7 +120,6 @@ class SparseLdlt {
   std::array<double, LdltPlan::kMaxRows> dinv_{};  // 1 / D
   // d_c L_rc of the rows below a supernode, over its columns (row stride kMaxRows)
   alignas(16) std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> e_{};
-  mutable std::array<double, LdltPlan::kMaxRows> y_{};
 };
 
 }  // namespace ernest::dynamics

@@ -282,76 +282,115 @@ bool SparseLdlt::factor(const LdltPlan& plan, const double* a) {
   return dense_ldlt(rows.data(), n - df, n - df, dinv_.data() + df, nullptr, 0, nullptr);
 }
 
-// Also compiled for AVX2 (common/vector_math.hpp; the same bits).
-ERNEST_ALSO_AVX2
-void SparseLdlt::solve(double* x) const {
+// x_c := A⁻¹ x_c for the K right-hand sides xs[0 .. K). Every column sees the operations of a
+// solve of its own in the same order (the same bits as K separate solves); interleaved, their
+// dependency chains (the triangular solves are latency bound) overlap. Inlined into solve() and
+// solve_many(), which are compiled for AVX2 too (common/vector_math.hpp; the same bits).
+template <int K>
+__attribute__((always_inline)) inline void SparseLdlt::solve_k(double* const* xs) const {
   const LdltPlan& plan = *plan_;
   const double* __restrict w = w_.data();
   const double* __restrict lc = lcol_.data();
   const std::uint8_t* __restrict cr = plan.col_rows_.data();
   const int s = plan.w_stride_, n = plan.n_, df = plan.dense_from_;
-  double* __restrict y = y_.data();
-  for (int p = 0; p < n; ++p) y[p] = x[plan.perm_[p]];
+  alignas(32) double ys[K][LdltPlan::kMaxRows];
+  for (int r = 0; r < K; ++r)
+    for (int p = 0; p < n; ++p) ys[r][p] = xs[r][plan.perm_[p]];
   const std::uint16_t* cs = plan.col_start_.data();
   // A supernode's columns (k0 .. k1, nested: column c's rows are c + 1 .. k1, then the rows
   // below k1) are contiguous slices of one vector z = (y[k0 + 1 .. k1], y[below]): column c's
   // is z[c - k0 ..]. The solves run over z without row indices, each entry seeing the same
   // operations in the same order as over y (the same bits).
-  alignas(32) double z[LdltPlan::kMaxRows];
+  alignas(32) double zs[K][LdltPlan::kMaxRows];
   const auto gather = [&](int k0, int k1) {
     const int nb = k1 - k0, m = cs[k1 + 1] - cs[k1];
-    for (int i = 0; i < nb; ++i) z[i] = y[k0 + 1 + i];
-    for (int i = 0; i < m; ++i) z[nb + i] = y[cr[cs[k1] + i]];
+    for (int r = 0; r < K; ++r) {
+      for (int i = 0; i < nb; ++i) zs[r][i] = ys[r][k0 + 1 + i];
+      for (int i = 0; i < m; ++i) zs[r][nb + i] = ys[r][cr[cs[k1] + i]];
+    }
     return nb + m;
+  };
+  const auto scatter = [&](int k0, int k1, int len) {
+    const int nb = k1 - k0;
+    for (int r = 0; r < K; ++r) {
+      for (int i = 0; i < nb; ++i) ys[r][k0 + 1 + i] = zs[r][i];
+      for (int i = nb; i < len; ++i) ys[r][cr[cs[k1] + i - nb]] = zs[r][i];
+    }
   };
   // L z = x: sparse columns (lone columns by row index, supernodes over z), then the dense
   // tail by rows.
   for (int sn = 0; sn < plan.n_supers_; ++sn) {
     const int k0 = plan.supers_[sn].first, k1 = k0 + plan.supers_[sn].width - 1;
     if (k0 == k1) {
-      const double yk = y[k0];
-      for (int q = cs[k0]; q < cs[k0 + 1]; ++q) y[cr[q]] -= lc[q] * yk;
+      for (int r = 0; r < K; ++r) {
+        double* y = ys[r];
+        const double yk = y[k0];
+        for (int q = cs[k0]; q < cs[k0 + 1]; ++q) y[cr[q]] -= lc[q] * yk;
+      }
       continue;
     }
-    const int len = gather(k0, k1), nb = k1 - k0;
+    const int len = gather(k0, k1);
     for (int c = k0; c <= k1; ++c) {
-      const double yc = c == k0 ? y[k0] : z[c - k0 - 1];
       const double* l = lc + cs[c];
-      double* zc = z + (c - k0);
-      sub_scaled(zc, l, yc, len - (c - k0));
+      for (int r = 0; r < K; ++r) {
+        const double yc = c == k0 ? ys[r][k0] : zs[r][c - k0 - 1];
+        sub_scaled(zs[r] + (c - k0), l, yc, len - (c - k0));
+      }
     }
-    for (int i = 0; i < nb; ++i) y[k0 + 1 + i] = z[i];
-    for (int i = nb; i < len; ++i) y[cr[cs[k1] + i - nb]] = z[i];
+    scatter(k0, k1, len);
   }
   for (int i = df + 1; i < n; ++i) {
     const double* wi = w + i * s + df;
-    const double* yd = y + df;
-    y[i] -= dot(wi, yd, i - df);
+    for (int r = 0; r < K; ++r) ys[r][i] -= dot(wi, ys[r] + df, i - df);
   }
-  for (int k = 0; k < n; ++k) y[k] *= dinv_[k];
+  for (int r = 0; r < K; ++r)
+    for (int k = 0; k < n; ++k) ys[r][k] *= dinv_[k];
   // Lᵀ x = z: the dense tail by rows (bottom up), then the sparse columns.
   for (int i = n - 1; i > df; --i) {
     const double* wi = w + i * s;
-    const double yi = y[i];
-    sub_scaled(y + df, wi + df, yi, i - df);
+    for (int r = 0; r < K; ++r) sub_scaled(ys[r] + df, wi + df, ys[r][i], i - df);
   }
   for (int sn = plan.n_supers_ - 1; sn >= 0; --sn) {
     const int k0 = plan.supers_[sn].first, k1 = k0 + plan.supers_[sn].width - 1;
     if (k0 == k1) {
       const int q0 = cs[k0];
-      y[k0] -= sum4(cs[k0 + 1] - q0, [&](int q) { return lc[q0 + q] * y[cr[q0 + q]]; });
+      for (int r = 0; r < K; ++r) {
+        double* y = ys[r];
+        y[k0] -= sum4(cs[k0 + 1] - q0, [&](int q) { return lc[q0 + q] * y[cr[q0 + q]]; });
+      }
       continue;
     }
     const int len = gather(k0, k1);
     for (int c = k1; c >= k0; --c) {
       const double* l = lc + cs[c];
-      const double* zc = z + (c - k0);
-      const double yc = y[c] - dot(l, zc, len - (c - k0));
-      y[c] = yc;
-      if (c > k0) z[c - k0 - 1] = yc;
+      for (int r = 0; r < K; ++r) {
+        const double yc = ys[r][c] - dot(l, zs[r] + (c - k0), len - (c - k0));
+        ys[r][c] = yc;
+        if (c > k0) zs[r][c - k0 - 1] = yc;
+      }
     }
   }
-  for (int p = 0; p < n; ++p) x[plan.perm_[p]] = y[p];
+  for (int r = 0; r < K; ++r)
+    for (int p = 0; p < n; ++p) xs[r][plan.perm_[p]] = ys[r][p];
+}
+
+ERNEST_ALSO_AVX2
+void SparseLdlt::solve(double* x) const { solve_k<1>(&x); }
+
+ERNEST_ALSO_AVX2
+void SparseLdlt::solve_many(double* x, int k, int stride) const {
+  double* cols[4];
+  for (int c = 0; c < k;) {
+    const int now = std::min(4, k - c);
+    for (int r = 0; r < now; ++r) cols[r] = x + (c + r) * stride;
+    switch (now) {
+      case 4: solve_k<4>(cols); break;
+      case 3: solve_k<3>(cols); break;
+      case 2: solve_k<2>(cols); break;
+      default: solve_k<1>(cols); break;
+    }
+    c += now;
+  }
 }
 
 }  // namespace ernest::dynamics

@@ -99,3 +99,41 @@ TEST(SparseLdlt, TheRoversFlatPatternSolvesLikeEigen) {
     expect_solves_like_eigen(s, rover, rng, ("rover trial " + std::to_string(trial)).c_str());
   }
 }
+
+// solve_many (several right-hand sides interleaved: solve_clamped's columns in ode_lcp.cpp) gives
+// the bits of one solve() per column, for every count up to 9 (two blocks of four and a
+// remainder), on the rover's pattern and on dense matrices; and the answers solve the system.
+TEST(SparseLdlt, SolveManyGivesTheBitsOfSeparateSolves) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int n : {5, 23, 37}) {
+    std::vector<Mask> pattern(n);
+    for (int i = 0; i < n; ++i)  // a band plus a dense tail: lone columns, supernodes, a clique
+      pattern[i] = ((Mask{2} << i) - 1) & ~((Mask{1} << std::max(0, i - 3)) - 1) |
+                   (i >= n - 6 ? (Mask{2} << i) - 1 : Mask{0});
+    const System s = spd_with_pattern(pattern, rng);
+    std::vector<unsigned> rows(n);
+    for (int i = 0; i < n; ++i) rows[i] = static_cast<unsigned>(i);
+    LdltPlan plan;
+    plan.analyse(pattern.data(), rows.data(), n, s.stride);
+    SparseLdlt ldlt;
+    ASSERT_TRUE(ldlt.factor(plan, s.a.data()));
+    for (int k = 1; k <= 9; ++k) {
+      const int stride = n + 3;  // columns apart, not packed
+      std::vector<double> many(static_cast<std::size_t>(k) * stride, 0.0), one(many.size());
+      for (auto& v : many) v = u(rng);
+      one = many;
+      ldlt.solve_many(many.data(), k, stride);
+      for (int c = 0; c < k; ++c) {
+        Eigen::Map<const Eigen::VectorXd> rhs(one.data() + c * stride, n);
+        const Eigen::VectorXd b = rhs;
+        ldlt.solve(one.data() + c * stride);
+        for (int i = 0; i < n; ++i)
+          ASSERT_EQ(many[c * stride + i], one[c * stride + i]) << "n " << n << " k " << k << " column " << c;
+        Eigen::Map<const Eigen::VectorXd> x(many.data() + c * stride, n);
+        EXPECT_LE((s.dense * x - b).norm(), 1e-12 * s.dense.norm() * x.norm());
+        for (int i = n; i < stride; ++i) EXPECT_EQ(many[c * stride + i], one[c * stride + i]);
+      }
+    }
+  }
+}
