@@ -25,7 +25,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [stepper ode|own] [reuse 0|1]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [stepper ode|own]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -40,8 +40,6 @@ int main(int argc, char** argv) {
   o.slip_warm_start = argc < 6 || std::atoi(argv[5]) != 0;
   // STEPPER: who steps the bodies (SimOptions::stepper; default: the option's default)
   if (argc >= 8) o.stepper = std::string(argv[7]) == "own" ? Stepper::Own : Stepper::Ode;
-  // REUSE: SimOptions::reuse_within_step (Own: re-solves reuse the last attempt's work)
-  if (argc >= 9) o.reuse_within_step = std::atoi(argv[8]) != 0;
   const double speed = 0.15;
   RoverSim sim(RoverParameters{}, HeightMap::flat(40, 20, 0.25, 0, -10, -10), rocks, o);
   sim.reset(0, 0, 0, 0, 0, speed);

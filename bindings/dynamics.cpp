@@ -203,10 +203,6 @@ void bind_dynamics(py::module_& m) {
                      "Stepper.Ode: ODE's dWorldStep; Stepper.Own: our own island step "
                      "(cpp/dynamics/island_step.hpp), the same step to ~1e-10, falling back to "
                      "dWorldStep where it does not reproduce it")
-      .def_readwrite("reuse_within_step", &SimOptions::reuse_within_step,
-                     "Stepper.Own: a re-solve of a step reuses the last attempt's stage 0 and "
-                     "the entries of A between unchanged rows (the same bits); False: "
-                     "everything recomputed")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,

@@ -7,7 +7,6 @@
 // integration (ode/src/util.cpp), written back with ODE's setters.
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "ernest/dynamics/island_step.hpp"
 
@@ -52,7 +51,30 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
       s.tacc_g[c] = t[c];
       if (gravity[c] != 0.0 && dBodyGetGravityMode(b)) s.facc_g[c] += mass_[i] * gravity[c];
     }
-    stage0(i, h);
+    dMatrix3 tmp;
+    dMultiply2_333(tmp, inv_inertia_body_[i].data(), s.R);
+    dMultiply0_333(s.invI, s.R, tmp);
+    if (dBodyGetGyroscopicMode(b)) {
+      // Lacoursière's implicit gyroscopic torque, as stage 0: with I and L = I w in the world
+      // frame, tau = (I (I - h [L]x)⁻¹ - 1) L / h
+      dMatrix3 I, itild = {0}, itinv;
+      dMultiply2_333(tmp, inertia_body_[i].data(), s.R);
+      dMultiply0_333(I, s.R, tmp);
+      dVector3 L;
+      dMultiply0_331(L, I, s.avel);
+      dSetCrossMatrixMinus(itild, L, 4);
+      for (int k = 0; k < 12; ++k) itild[k] = itild[k] * h + I[k];
+      dScaleVector3(L, fps);
+      if (dInvertMatrix3(itinv, itild) != 0) {
+        dMultiply0_333(itild, I, itinv);
+        itild[0] -= 1;
+        itild[5] -= 1;
+        itild[10] -= 1;
+        dVector3 tau0;
+        dMultiply0_331(tau0, itild, L);
+        for (int c = 0; c < 3; ++c) s.tacc_g[c] += tau0[c];
+      }
+    }
   }
 
   // ---- stage 2a: the rows, joints ordered as ODE's (purely unbounded joints first: nub rows)
@@ -104,11 +126,11 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
       dMultiply0_133(JM + 3, J + 3, bs_[bi].invI);
     }
   }
-  build_a(m);
+  build_a(m, h);
 
   // ---- stage 3: the solve
   if (m > 0) {
-    if (!solve_sparse(ws, static_cast<unsigned>(m), a(), bx_.data(), nullptr,
+    if (!solve_sparse(ws, static_cast<unsigned>(m), a_.data(), bx_.data(), nullptr,
                       static_cast<unsigned>(nub), lh_.data(), findex_.data()))
       return Outcome::SolveRefused;
     ++ws.sparse;
@@ -142,74 +164,17 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
   return Outcome::Stepped;
 }
 
-// Stage 0 of body i: invI in the world frame and the gyroscopic torque added to tacc_g. Both
-// depend only on R, the angular velocity, h and the body's constants, so an attempt that starts
-// from the same bodies (the implicit-slip and guess re-solves restore them) takes the last ones.
-void IslandStep::stage0(int i, double h) {
-  BodyState& s = bs_[i];
-  const dBodyID b = body_[i];
-  Stage0& c = stage0_[i];
-  const bool gyro = dBodyGetGyroscopicMode(b) != 0;
-  const bool hit = reuse && c.valid && c.gyro == gyro && c.h == h &&
-                   std::memcmp(c.R, s.R, sizeof c.R) == 0 &&
-                   std::memcmp(c.avel, s.avel, sizeof c.avel) == 0;
-  if (!hit) {
-    c.valid = true;
-    c.gyro = gyro;
-    c.h = h;
-    std::memcpy(c.R, s.R, sizeof c.R);
-    std::memcpy(c.avel, s.avel, sizeof c.avel);
-    dMatrix3 tmp;
-    dMultiply2_333(tmp, inv_inertia_body_[i].data(), s.R);
-    dMultiply0_333(c.invI, s.R, tmp);
-    c.tau = false;
-    if (gyro) {
-      // Lacoursière's implicit gyroscopic torque, as stage 0: with I and L = I w in the world
-      // frame, tau = (I (I - h [L]x)⁻¹ - 1) L / h
-      dMatrix3 I, itild = {0}, itinv;
-      dMultiply2_333(tmp, inertia_body_[i].data(), s.R);
-      dMultiply0_333(I, s.R, tmp);
-      dVector3 L;
-      dMultiply0_331(L, I, s.avel);
-      dSetCrossMatrixMinus(itild, L, 4);
-      for (int k = 0; k < 12; ++k) itild[k] = itild[k] * h + I[k];
-      dScaleVector3(L, 1.0 / h);  // (fps)
-      if (dInvertMatrix3(itinv, itild) != 0) {
-        dMultiply0_333(itild, I, itinv);
-        itild[0] -= 1;
-        itild[5] -= 1;
-        itild[10] -= 1;
-        dMultiply0_331(c.tau0, itild, L);
-        c.tau = true;
-      }
-    }
-  }
-  std::memcpy(s.invI, c.invI, sizeof s.invI);
-  if (c.tau)
-    for (int k = 0; k < 3; ++k) s.tacc_g[k] += c.tau0[k];
-}
-
 // A's lower triangle (row stride dPAD(m), ODE's layout for the solver), body by body: the rows
 // touching body b (in row order), their Jacobians on b gathered column by column, so that row
 // p's products with rows q <= p, (M⁻¹ Jᵀ)_p · J_q, are six independent multiply-adds per q that
 // vectorise across q (entry by entry, each a chain of dependent adds, was as slow as ODE's).
-// The diagonal starts at the row's CFM / h. Into the other buffer than the last attempt's, which
-// build_a_reusing copies from.
-void IslandStep::build_a(int m) {
-  cur_ ^= 1;
-  if (m == 0) {
-    prev_m_ = -1;
-    return;
-  }
-  if (reuse && build_a_reusing(m)) {
-    ++a_reused;
-    remember_rows(m);
-    return;
-  }
-  double* a = this->a();
+// The diagonal starts at the row's CFM / h.
+void IslandStep::build_a(int m, double h) {
+  (void)h;
+  if (m == 0) return;
   const int stride = dPAD(m);
   for (int r = 0; r < m; ++r) {  // (the solver reads row r up to column r + 1)
-    double* row = &a[static_cast<std::size_t>(r) * stride];
+    double* row = &a_[static_cast<std::size_t>(r) * stride];
     std::fill(row, row + std::min(r + 2, stride), 0.0);
     row[r] = cfm_[r];
   }
@@ -232,111 +197,10 @@ void IslandStep::build_a(int m) {
                    *j3 = jb_[3].data(), *j4 = jb_[4].data(), *j5 = jb_[5].data();
       for (int q = 0; q <= p; ++q)
         dot[q] = ((m0 * j0[q] + m1 * j1[q]) + (m2 * j2[q] + m3 * j3[q])) + (m4 * j4[q] + m5 * j5[q]);
-      double* arow = &a[static_cast<std::size_t>(rows[p]) * stride];
+      double* arow = &a_[static_cast<std::size_t>(rows[p]) * stride];
       for (int q = 0; q <= p; ++q) arow[rows[q]] += dot[q];
     }
   }
-  if (reuse)
-    remember_rows(m);
-  else
-    prev_m_ = -1;  // (the other buffer no longer holds the remembered rows' A)
-}
-
-// A(p, q), q <= p, as build_a forms it: from the CFM (diagonal) or zero, (M⁻¹ Jᵀ)_p · J_q added
-// body by body in ascending order, each product in build_a's association (the same bits: the
-// build has no fused multiply-adds, IEEE products and sums round alike in vector lanes).
-double IslandStep::a_entry(int p, int q) const {
-  double s = p == q ? cfm_[p] : 0.0;
-  const int lo = rb_[p] >= 0 && rb_[p] < ra_[p] ? rb_[p] : ra_[p];
-  const int hi = lo == ra_[p] ? rb_[p] : ra_[p];
-  for (const int b : {lo, hi}) {
-    if (b < 0) continue;
-    const int sq = ra_[q] == b ? 0 : rb_[q] == b ? 1 : -1;
-    if (sq < 0) continue;
-    const double* jm = &jm_[p][ra_[p] == b ? 0 : 6];
-    const double* j = &j_[q][6 * sq];
-    s += ((jm[0] * j[0] + jm[1] * j[1]) + (jm[2] * j[2] + jm[3] * j[3])) +
-         (jm[4] * j[4] + jm[5] * j[5]);
-  }
-  return s;
-}
-
-// Reuse: A's entry between rows p > q equals the last attempt's between their matches p' > q'
-// when both rows have the same Jacobians on the same bodies, whose invI (hence M⁻¹ Jᵀ) is the
-// same: a pure function of equal inputs. Rows are matched in order (a re-solve emits the same
-// joints in the same order; a row emitted as an explicit force instead, or a new contact, shifts
-// the rest), so runs of matched rows copy as runs. New rows' entries, pairs whose order flipped
-// and the diagonal (its CFM changes with the force-dependent bounds) are computed afresh
-// (a_entry). False, with nothing written: too few rows match to pay (build_a then).
-bool IslandStep::build_a_reusing(int m) {
-  if (prev_m_ <= 0) return false;
-  std::array<bool, kBodies> same;
-  for (int b = 0; b < kBodies; ++b)
-    same[b] = std::memcmp(bs_[b].invI, prev_invI_[b].data(), sizeof bs_[b].invI) == 0;
-  if (std::none_of(same.begin(), same.end(), [](bool x) { return x; })) return false;
-  const auto matches = [&](int p, int pp) {
-    return ra_[p] == prev_ra_[pp] && rb_[p] == prev_rb_[pp] && same[ra_[p]] &&
-           (rb_[p] < 0 || same[rb_[p]]) &&
-           std::memcmp(j_[p].data(), prev_j_[pp].data(), sizeof(double) * 12) == 0;
-  };
-  int matched = 0, next = 0;
-  for (int p = 0; p < m; ++p) {
-    int found = -1;
-    if (next < prev_m_ && matches(p, next)) {
-      found = next;
-    } else {
-      for (int pp = 0; pp < prev_m_; ++pp)
-        if (pp != next && matches(p, pp)) {
-          found = pp;
-          break;
-        }
-    }
-    map_[p] = found;
-    if (found >= 0) {
-      ++matched;
-      next = found + 1;
-    }
-  }
-  if (2 * matched < m) return false;
-  a_rows_new += static_cast<std::uint64_t>(m - matched);
-  double* a = this->a();
-  const double* prev = a_buf_[cur_ ^ 1].data();
-  const int stride = dPAD(m), pstride = dPAD(prev_m_);
-  for (int p = 0; p < m; ++p) {
-    double* row = &a[static_cast<std::size_t>(p) * stride];
-    const int mp = map_[p];
-    if (mp < 0) {
-      for (int q = 0; q < p; ++q) row[q] = a_entry(p, q);
-    } else {
-      const double* prow = &prev[static_cast<std::size_t>(mp) * pstride];
-      for (int q = 0; q < p;) {
-        const int mq = map_[q];
-        if (mq < 0 || mq >= mp) {
-          row[q] = a_entry(p, q);
-          ++q;
-          continue;
-        }
-        int e = q + 1;
-        while (e < p && map_[e] == mq + (e - q) && map_[e] < mp) ++e;
-        std::memcpy(row + q, prow + mq, sizeof(double) * static_cast<std::size_t>(e - q));
-        q = e;
-      }
-    }
-    row[p] = a_entry(p, p);
-    if (p + 1 < stride) row[p + 1] = 0.0;
-  }
-  return true;
-}
-
-// This attempt's rows and bodies, for the next attempt's build_a_reusing.
-void IslandStep::remember_rows(int m) {
-  prev_m_ = m;
-  for (int r = 0; r < m; ++r) {
-    prev_j_[r] = j_[r];
-    prev_ra_[r] = ra_[r];
-    prev_rb_[r] = rb_[r];
-  }
-  for (int b = 0; b < kBodies; ++b) std::copy(bs_[b].invI, bs_[b].invI + 12, prev_invI_[b].begin());
 }
 
 // Stage 4's velocity update and dxStepBody: v += h (f_c + f) / m, w += invI h (t_c + t), then

@@ -57,17 +57,6 @@ class IslandStep {
   enum class Outcome { Stepped, Unsupported, SolveRefused };
   Outcome step(dWorldID world, double h, LcpWorkspace& ws);
 
-  /// Reuse the last attempt's work (SimOptions::reuse_within_step; island_step.cpp, "Reuse"):
-  /// stage 0 of a body whose pose and spin are the last attempt's, and A's entries between rows
-  /// whose Jacobians and bodies are the last attempt's. The same bits as without (each reused
-  /// value is a pure function of inputs that compared equal bit for bit).
-  bool reuse = true;
-  /// A new step starts (its bodies saved): the last attempt's rows are another step's, whose
-  /// bodies have moved, so nothing of them is looked for.
-  void new_step() { prev_m_ = -1; }
-  /// Attempts whose A took entries from the last attempt's, and the rows that were new there.
-  std::uint64_t a_reused = 0, a_rows_new = 0;
-
  private:
   enum class Kind : std::int8_t { Hinge, Universal, AMotor, Contact, LMotor };
   struct Joint {
@@ -96,11 +85,7 @@ class IslandStep {
   bool contact_rows(Joint& jt, double fps, double erp);
   bool lmotor_rows(Joint& jt);
   int new_row(Joint& jt, double world_cfm);
-  void build_a(int m);
-  bool build_a_reusing(int m);
-  double a_entry(int p, int q) const;
-  void remember_rows(int m);
-  void stage0(int i, double h);
+  void build_a(int m, double h);
   void integrate(double h);
 
   std::array<dBodyID, kBodies> body_{};
@@ -125,24 +110,7 @@ class IslandStep {
   std::array<double, 2 * kMaxRows> bx_{}, lh_{};
   std::array<double, kMaxRows> cfm_{};
   std::array<int, kMaxRows> findex_{};
-  // A of this attempt (a_buf_[cur_]) and of the last (the other): the solver reads A after
-  // build_a, and the next attempt's build_a reads the last one's
-  std::array<std::array<double, kMaxRows * kMaxRows>, 2> a_buf_{};
-  int cur_ = 0;
-  double* a() { return a_buf_[cur_].data(); }
-  // The last attempt's rows (Jacobians, bodies) and the bodies' world-frame invI it used
-  int prev_m_ = -1;
-  std::array<std::array<double, 12>, kMaxRows> prev_j_{};
-  std::array<int, kMaxRows> prev_ra_{}, prev_rb_{}, map_{};
-  std::array<std::array<dReal, 12>, kBodies> prev_invI_{};
-  // Stage 0 per body, keyed by what it depends on (R, the angular velocity, h, gyroscopic mode)
-  struct Stage0 {
-    bool valid = false, gyro = false, tau = false;
-    dReal R[12], avel[3];
-    double h = 0.0;
-    dReal invI[12], tau0[3];
-  };
-  std::array<Stage0, kBodies> stage0_{};
+  std::array<double, kMaxRows * kMaxRows> a_{};
   // build_a's per-body gather: the Jacobians on the body, column by column, and their sides
   std::array<std::array<double, kMaxRows>, 6> jb_{};
   std::array<int, kMaxRows> side_{};

@@ -124,12 +124,6 @@ struct SimOptions {
   /// joint option it does not know, a solve the sparse path refuses), so the two differ by
   /// rounding only.
   Stepper stepper = Stepper::Own;
-  /// Stepper::Own: an attempt that starts from the same bodies as the last one (the implicit
-  /// slip's and the guesses' re-solves of a step) reuses its stage 0 and the entries of A
-  /// between rows whose Jacobians did not change (cpp/dynamics/island_step.cpp, "Reuse"). The
-  /// same bits either way (benchmarks/RESULTS.md, "Session 11: re-solves within a step"); false
-  /// recomputes everything (the check).
-  bool reuse_within_step = true;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
   void validate() const;

@@ -255,7 +255,6 @@ void RoverSim::Impl::world_step() {
     dWorldStep(world, h);
     return;
   }
-  island.reuse = opt.reuse_within_step;
   const detail::IslandStep::Outcome r = island.step(world, h, lcp);
   if (r == detail::IslandStep::Outcome::Stepped) {
     ++stats.own_steps;
@@ -291,7 +290,6 @@ void RoverSim::Impl::step_once() {
   base_force[kChassis] += pending_force;
   pending_force.setZero();
   save_bodies();
-  island.new_step();
 
   // ODE aborts the process (an assertion in its quaternion normalisation) when a step produces a
   // non-finite state, so emit() refuses absurd forces before stepping; check_divergence() then

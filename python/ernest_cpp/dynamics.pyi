@@ -129,7 +129,6 @@ class SimOptions:
     guess_obstacle_contacts: bool
     sparse_lcp: bool
     stepper: Stepper
-    reuse_within_step: bool
     max_speed: float
     max_angular_speed: float
     slip_force_tolerance: float
