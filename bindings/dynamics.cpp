@@ -309,6 +309,10 @@ void bind_dynamics(py::module_& m) {
                     "attempts stepped by our own island step (SimOptions.stepper = Own)")
       .def_readonly("own_fallbacks", &SolverStats::own_fallbacks,
                     "attempts our own island step handed to ODE's dWorldStep")
+      .def_readonly("plans_made", &SolverStats::plans_made,
+                    "sparse solves' symbolic analyses for row sets not remembered")
+      .def_readonly("plans_grown", &SolverStats::plans_grown,
+                    "remembered plans analysed again, grown by a pattern outside their factor")
       .def_readonly("obstacles_touched", &SolverStats::obstacles_touched,
                     "distinct obstacles in contact at the start of the last step")
       .def_readonly("fast_lcp", &SolverStats::fast_lcp,
@@ -329,7 +333,9 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.obstacle_explicit) + ", obstacle_implicit=" +
                std::to_string(s.obstacle_implicit) + ", own_steps=" +
                std::to_string(s.own_steps) + ", own_fallbacks=" +
-               std::to_string(s.own_fallbacks) + ", fast_lcp=" +
+               std::to_string(s.own_fallbacks) + ", plans_made=" +
+               std::to_string(s.plans_made) + ", plans_grown=" +
+               std::to_string(s.plans_grown) + ", fast_lcp=" +
                (s.fast_lcp ? "True" : "False") + ")";
       });
 

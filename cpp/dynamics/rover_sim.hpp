@@ -232,6 +232,10 @@ struct SolverStats {
   /// refused: then ODE's Dantzig solver).
   std::uint64_t own_steps = 0;
   std::uint64_t own_fallbacks = 0;
+  /// Sparse solves' symbolic analyses (LdltPlan::analyse): plans made for row sets not
+  /// remembered, and remembered plans analysed again grown by a pattern outside their factor.
+  std::uint64_t plans_made = 0;
+  std::uint64_t plans_grown = 0;
   /// Distinct obstacles in contact with the rover at the start of the last step (not a count).
   int obstacles_touched = 0;
   /// Solves can take the sparse path: SimOptions::sparse_lcp, and our own island step

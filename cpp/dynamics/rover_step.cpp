@@ -431,6 +431,8 @@ void RoverSim::Impl::step_once() {
   if (ode_lcp_messages != lcp_messages) ++stats.lcp_errors;
   stats.sparse_solves = lcp.sparse;
   stats.dense_solves = lcp.dense;
+  stats.plans_made = lcp.plans_made;
+  stats.plans_grown = lcp.plans_grown;
   if (opt.guess_active_set) {
     const GuessResult r = RowGuesser::result(held, attempts, tried);
     ++(r == GuessResult::First ? stats.first_guess

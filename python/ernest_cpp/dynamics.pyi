@@ -153,6 +153,8 @@ class SolverStats:
     obstacle_implicit: int
     own_steps: int
     own_fallbacks: int
+    plans_made: int
+    plans_grown: int
     obstacles_touched: int
     fast_lcp: bool
 

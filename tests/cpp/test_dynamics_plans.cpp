@@ -1,6 +1,6 @@
 // Tests of the sparse solver's symbolic analysis (LdltPlan::analyse: minimum degree on row sets of
 // up to 64 rows in one word, more in two) and of the plans a simulation remembers
-// (LcpWorkspace::find/adopt/clear/save/load in cpp/dynamics/ode_lcp.cpp).
+// (LcpWorkspace::find/adopt/clear/save/load in cpp/dynamics/ode_lcp.cpp), as SolverStats counts them.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/dynamics/sparse_ldlt.hpp"
 
 using namespace ernest::dynamics;
@@ -201,4 +202,36 @@ TEST(LcpWorkspace, RemembersPlansRoundRobinAndCarriesThemThroughSaveAndLoad) {
   EXPECT_THROW(back.load(skipped), std::invalid_argument);
   EXPECT_NO_THROW(back.load(good));
   EXPECT_NE(find(back, row_set(2)), nullptr);
+}
+
+// SolverStats::plans_made / plans_grown are the simulation's analyses: the first solve must make
+// a plan, no solve analyses more than one plan per attempt at its active set (at most three
+// attempts on soil without rocks), and the plans travel in the Snapshot, so that the same steps
+// after restore() make and grow exactly as many plans again.
+TEST(LcpWorkspace, SolverStatsCountTheSimulationsPlans) {
+  SimOptions o;
+  o.friction = 0.8;
+  RoverSim sim(RoverParameters{}, HeightMap::flat(8, 8, 0.25, 0, -2, -2), {}, o);
+  sim.reset(0, 0, 0, 0, 0, 0.15);
+  Commands c;
+  for (auto& w : c.wheel_speed) w = 0.15 / sim.parameters().wheel_radius;
+  sim.set_commands(c);
+  sim.step_n(20);
+  const SolverStats first = sim.solver_stats();
+  EXPECT_GE(first.plans_made, 1u);
+  EXPECT_LE(first.plans_made + first.plans_grown, 3 * first.sparse_solves);
+  const Snapshot start = sim.snapshot();
+  c.wheel_speed[0] = c.wheel_speed[3] = 0.0;  // turning: rows change mode, new row sets
+  sim.set_commands(c);
+  sim.step_n(60);
+  const SolverStats a = sim.solver_stats();
+  EXPECT_GT(a.sparse_solves, first.sparse_solves);
+  EXPECT_GT(a.plans_made + a.plans_grown, first.plans_made + first.plans_grown);
+  sim.restore(start);
+  sim.set_commands(c);
+  sim.step_n(60);
+  const SolverStats b = sim.solver_stats();
+  EXPECT_EQ(b.plans_made - a.plans_made, a.plans_made - first.plans_made);
+  EXPECT_EQ(b.plans_grown - a.plans_grown, a.plans_grown - first.plans_grown);
+  EXPECT_EQ(b.sparse_solves - a.sparse_solves, a.sparse_solves - first.sparse_solves);
 }

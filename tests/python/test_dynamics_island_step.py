@@ -39,3 +39,12 @@ def test_own_step_agrees_with_dworldstep_and_is_counted():
     # the same run to rounding: per-step differences ~1e-15 m (test_dynamics_island_step)
     np.testing.assert_allclose(own.state_vector(), ode.state_vector(), rtol=1e-9, atol=1e-9)
     assert own.state.position[0] > 0.4
+
+
+def test_solver_stats_count_the_sparse_solves_plans():
+    # SolverStats.plans_made / plans_grown: the sparse solves' symbolic analyses (LdltPlan)
+    for stepper in (D.Stepper.Own, D.Stepper.Ode):
+        s = _run(stepper, steps=120).solver_stats
+        assert 1 <= s.plans_made <= s.sparse_solves, stepper
+        assert 0 <= s.plans_grown <= 3 * s.sparse_solves, stepper
+        assert f"plans_made={s.plans_made}, plans_grown={s.plans_grown}" in repr(s)
