@@ -56,45 +56,30 @@ int IslandStep::body_index(dBodyID b) const {
   return -2;  // not ours
 }
 
-void IslandStep::add_hinge(dJointID j, const dReal axis_world[3]) {
+IslandStep::Joint& IslandStep::add_permanent(dJointID j, Kind kind) {
   if (n_permanent_ >= static_cast<int>(permanent_.size()))
     throw std::length_error("IslandStep: more permanent joints than it holds");
   Joint& jt = permanent_[n_permanent_++];
   jt = Joint{};
-  jt.kind = Kind::Hinge;
+  jt.kind = kind;
   jt.id = j;
   jt.a = body_index(dJointGetBody(j, 0));
   jt.b = body_index(dJointGetBody(j, 1));
   jt.fb = dJointGetFeedback(j);
+  return jt;
+}
+
+void IslandStep::add_hinge(dJointID j, const dReal axis_world[3]) {
+  Joint& jt = add_permanent(j, Kind::Hinge);
   // setAxes (joint.cpp): the normalised axis in body 2's frame, R2ᵀ q
   dReal q[4] = {axis_world[0], axis_world[1], axis_world[2], 0.0};
   dNormalize3(q);
   dMultiply1_331(jt.axis2, dBodyGetRotation(dJointGetBody(j, 1)), q);
 }
 
-void IslandStep::add_universal(dJointID j) {
-  if (n_permanent_ >= static_cast<int>(permanent_.size()))
-    throw std::length_error("IslandStep: more permanent joints than it holds");
-  Joint& jt = permanent_[n_permanent_++];
-  jt = Joint{};
-  jt.kind = Kind::Universal;
-  jt.id = j;
-  jt.a = body_index(dJointGetBody(j, 0));
-  jt.b = body_index(dJointGetBody(j, 1));
-  jt.fb = dJointGetFeedback(j);
-}
+void IslandStep::add_universal(dJointID j) { add_permanent(j, Kind::Universal); }
 
-void IslandStep::add_amotor(dJointID j) {
-  if (n_permanent_ >= static_cast<int>(permanent_.size()))
-    throw std::length_error("IslandStep: more permanent joints than it holds");
-  Joint& jt = permanent_[n_permanent_++];
-  jt = Joint{};
-  jt.kind = Kind::AMotor;
-  jt.id = j;
-  jt.a = body_index(dJointGetBody(j, 0));
-  jt.b = body_index(dJointGetBody(j, 1));
-  jt.fb = dJointGetFeedback(j);
-}
+void IslandStep::add_amotor(dJointID j) { add_permanent(j, Kind::AMotor); }
 
 void IslandStep::add_contact(const dContact& c, dBodyID b1, dBodyID b2, dJointFeedback* fb) {
   if (n_attempt_ >= kMaxAttemptJoints) {  // step() falls back (materialise creates them all)
@@ -148,8 +133,16 @@ void IslandStep::materialise(dWorldID world, dJointGroupID group) const {
 
 // setBall (joint.cpp): three rows holding the anchors together, J1 = [I, -[a1]x],
 // J2 = [-I, [a2]x], rhs = erp fps (anchor2 - anchor1).
-static void ball_rows(double (*J[3]), double* rhs[3], const dReal* p1, const dReal* p2,
-                      const dReal* w1, const dReal* w2, double k) {
+bool IslandStep::ball_rows(Joint& jt, const dReal* w1, const dReal* w2, double k) {
+  double* J[3];
+  double* rhs[3];
+  for (int i = 0; i < 3; ++i) {
+    const int r = new_row(jt, world_cfm_);
+    if (r < 0) return false;
+    J[i] = j_[r].data();
+    rhs[i] = &bx_[2 * r];
+  }
+  const dReal *p1 = bs_[jt.a].pos, *p2 = bs_[jt.b].pos;
   const double a1[3] = {w1[0] - p1[0], w1[1] - p1[1], w1[2] - p1[2]};
   const double a2[3] = {w2[0] - p2[0], w2[1] - p2[1], w2[2] - p2[2]};
   for (int i = 0; i < 3; ++i) {
@@ -164,6 +157,18 @@ static void ball_rows(double (*J[3]), double* rhs[3], const dReal* p1, const dRe
     j[9 + v] = a2[u];
     *rhs[i] = k * (w2[i] - w1[i]);
   }
+  return true;
+}
+
+// A row against rotation about d of body a relative to body b: J = [0, d; 0, -d]. -1: too many.
+int IslandStep::angular_row(Joint& jt, const dReal* d) {
+  const int r = new_row(jt, world_cfm_);
+  if (r < 0) return -1;
+  for (int c = 0; c < 3; ++c) {
+    j_[r][3 + c] = d[c];
+    j_[r][9 + c] = -d[c];
+  }
+  return r;
 }
 
 bool IslandStep::hinge_rows(Joint& jt, double fps, double erp) {
@@ -177,15 +182,7 @@ bool IslandStep::hinge_rows(Joint& jt, double fps, double erp) {
   dJointGetHingeAnchor(j, w1);
   dJointGetHingeAnchor2(j, w2);
   const double k = fps * erp;
-  double* J[3];
-  double* rhs[3];
-  for (int i = 0; i < 3; ++i) {
-    const int r = new_row(jt, world_cfm_);
-    if (r < 0) return false;
-    J[i] = j_[r].data();
-    rhs[i] = &bx_[2 * r];
-  }
-  ball_rows(J, rhs, bs_[jt.a].pos, bs_[jt.b].pos, w1, w2, k);
+  if (!ball_rows(jt, w1, w2, k)) return false;
   // hinge.cpp: two rows against rotation off the axis, p and q spanning its normal plane
   dJointGetHingeAxis(j, ax1);
   dPlaneSpace(ax1, p, q);
@@ -193,12 +190,8 @@ bool IslandStep::hinge_rows(Joint& jt, double fps, double erp) {
   dCalcVectorCross3(b, ax1, ax2);
   const dReal* dirs[2] = {p, q};
   for (const dReal* d : dirs) {
-    const int r = new_row(jt, world_cfm_);
+    const int r = angular_row(jt, d);
     if (r < 0) return false;
-    for (int c = 0; c < 3; ++c) {
-      j_[r][3 + c] = d[c];
-      j_[r][9 + c] = -d[c];
-    }
     bx_[2 * r] = k * dCalcVectorDot3(b, d);
   }
   return true;
@@ -211,15 +204,7 @@ bool IslandStep::universal_rows(Joint& jt, double fps, double erp) {
   dJointGetUniversalAnchor(j, w1);
   dJointGetUniversalAnchor2(j, w2);
   const double k = fps * erp;
-  double* J[3];
-  double* rhs[3];
-  for (int i = 0; i < 3; ++i) {
-    const int r = new_row(jt, world_cfm_);
-    if (r < 0) return false;
-    J[i] = j_[r].data();
-    rhs[i] = &bx_[2 * r];
-  }
-  ball_rows(J, rhs, bs_[jt.a].pos, bs_[jt.b].pos, w1, w2, k);
+  if (!ball_rows(jt, w1, w2, k)) return false;
   // universal.cpp: one row against rotation about the normal of both axes
   dJointGetUniversalAxis1(j, ax1);
   dJointGetUniversalAxis2(j, ax2);
@@ -227,12 +212,8 @@ bool IslandStep::universal_rows(Joint& jt, double fps, double erp) {
   dAddVectorScaledVector3(ax2t, ax2, ax1, -dot);
   dCalcVectorCross3(p, ax1, ax2t);
   dNormalize3(p);
-  int r = new_row(jt, world_cfm_);
+  int r = angular_row(jt, p);
   if (r < 0) return false;
-  for (int c = 0; c < 3; ++c) {
-    j_[r][3 + c] = p[c];
-    j_[r][9 + c] = -p[c];
-  }
   bx_[2 * r] = fps * erp * (-dot);
   // the stops (addLimot with limit set; no motor on the joint itself)
   const int lo_p[2] = {dParamLoStop, dParamLoStop2}, hi_p[2] = {dParamHiStop, dParamHiStop2};
@@ -253,13 +234,8 @@ bool IslandStep::universal_rows(Joint& jt, double fps, double erp) {
     const int limit = limiting[s] ? rotational_limit(angle[s], lo[s], hi[s], err) : 0;
     if (limit == 0) continue;
     if (dJointGetUniversalParam(j, dParamBounce + base[s]) > 0.0) return false;
-    r = new_row(jt, world_cfm_);
+    r = angular_row(jt, s == 0 ? ax1 : ax2);
     if (r < 0) return false;
-    const dReal* ax = s == 0 ? ax1 : ax2;
-    for (int c = 0; c < 3; ++c) {
-      j_[r][3 + c] = ax[c];
-      j_[r][9 + c] = -ax[c];
-    }
     bx_[2 * r] = -fps * dJointGetUniversalParam(j, dParamStopERP + base[s]) * err;
     cfm_[r] = dJointGetUniversalParam(j, dParamStopCFM + base[s]);
     if (lo[s] != hi[s]) {

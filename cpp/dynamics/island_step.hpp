@@ -80,9 +80,12 @@ class IslandStep {
     double inv_mass;
   };
   int body_index(dBodyID b) const;
+  Joint& add_permanent(dJointID j, Kind kind);
   bool add_rows(Joint& jt, double fps, double erp);
   bool hinge_rows(Joint& jt, double fps, double erp);
   bool universal_rows(Joint& jt, double fps, double erp);
+  bool ball_rows(Joint& jt, const dReal* w1, const dReal* w2, double k);
+  int angular_row(Joint& jt, const dReal* d);
   bool amotor_rows(Joint& jt);
   bool contact_rows(Joint& jt, double fps, double erp);
   bool lmotor_rows(Joint& jt);
