@@ -82,7 +82,7 @@ void IslandStep::add_universal(dJointID j) { add_permanent(j, Kind::Universal); 
 void IslandStep::add_amotor(dJointID j) { add_permanent(j, Kind::AMotor); }
 
 void IslandStep::add_contact(const dContact& c, dBodyID b1, dBodyID b2, dJointFeedback* fb) {
-  if (n_attempt_ >= kMaxAttemptJoints) {  // step() falls back (materialise creates them all)
+  if (n_attempt_ >= kMaxAttemptJoints) {  // counted, not kept: step() refuses (never: the caller's static_assert)
     ++n_attempt_;
     return;
   }

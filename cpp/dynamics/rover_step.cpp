@@ -220,30 +220,20 @@ bool RoverSim::Impl::solve_rows(RowStates& guess, RowStates& next, RowStates& tr
   return held;
 }
 
+// The attempt's contacts and linear motors are recorded by the island step for either stepper;
+// for dWorldStep, world_step() creates them in ODE (IslandStep::materialise) in the same order.
+// Every attempt's joints fit: four ground contacts, four compaction motors, the obstacles'.
+static_assert(kMaxObstacleContacts + 8 <= detail::IslandStep::kMaxAttemptJoints,
+              "IslandStep must record every joint of an attempt");
+
 void RoverSim::Impl::add_contact_joint(const dContact& c, dBodyID b1, dBodyID b2,
                                        dJointFeedback* fb) {
-  if (opt.stepper == Stepper::Own) {
-    island.add_contact(c, b1, b2, fb);
-    return;
-  }
-  dJointID j = dJointCreateContact(world, contacts, &c);
-  dJointAttach(j, b1, b2);
-  if (fb) dJointSetFeedback(j, fb);
+  island.add_contact(c, b1, b2, fb);
 }
 
 void RoverSim::Impl::add_lmotor_joint(dBodyID b, const Vec3& axis, double fmax, double cfm) {
-  if (opt.stepper == Stepper::Own) {
-    const double a[3] = {axis.x(), axis.y(), axis.z()};
-    island.add_lmotor(b, a, 0.0, fmax, cfm);
-    return;
-  }
-  dJointID lm = dJointCreateLMotor(world, contacts);
-  dJointAttach(lm, b, nullptr);
-  dJointSetLMotorNumAxes(lm, 1);
-  dJointSetLMotorAxis(lm, 0, 0, axis.x(), axis.y(), axis.z());
-  dJointSetLMotorParam(lm, dParamVel, 0.0);
-  dJointSetLMotorParam(lm, dParamFMax, fmax);
-  dJointSetLMotorParam(lm, dParamCFM, cfm);
+  const double a[3] = {axis.x(), axis.y(), axis.z()};
+  island.add_lmotor(b, a, 0.0, fmax, cfm);
 }
 
 // One attempt's step of the bodies. Own: our island step (island_step.hpp); where it does not
@@ -252,6 +242,7 @@ void RoverSim::Impl::add_lmotor_joint(dBodyID b, const Vec3& axis, double fmax, 
 // solver then, as the hook would have gone).
 void RoverSim::Impl::world_step() {
   if (opt.stepper != Stepper::Own) {
+    island.materialise(world, contacts);
     dWorldStep(world, h);
     return;
   }
