@@ -1,10 +1,20 @@
 """Dynamics from Python, like for like with MuJoCo (issues 3 and 17): the same rover — same bodies,
 joints, masses, inertias, step — driving 0.15 m/s on flat ground and through fields of 20 and 100
 box rocks, in our ODE simulator on M90 soil (Bekker–Wong) and in MuJoCo on rigid ground with the
-same boxes. MuJoCo's wheels are spheres of the wheel radius: one contact per wheel on flat ground,
-as ours (a cylinder touches MuJoCo's plane at two points: 8 contacts against our 4). Prints
-microseconds per step (medians of interleaved repeats, stepping loops in C in both) and our time
-over MuJoCo's per scenario.
+same boxes. MuJoCo's wheels meet the ground as spheres of the wheel radius: one contact per wheel
+on flat ground, as ours (a cylinder touches MuJoCo's plane at two points: 8 contacts against our
+4). Against the rocks MuJoCo is timed twice:
+- "our wheel shape" (the like-for-like figure, since session 12): the wheel meets the rocks as
+  ours does, as a cylinder of the wheel's radius and width, with one contact per wheel-rock pair
+  as ours (MuJoCo's multi-point convex collision, multiccd, off; our collider's points are merged
+  into one contact per pair). The sphere is kept for the ground only and the cylinder for the
+  rocks only (contype / conaffinity), so flat ground is the same model as before;
+- "sphere wheels" (sessions 9-11): the sphere meets the rocks too, a different and much cheaper
+  collision (sphere-box) than ours (cylinder-box), and a sphere touches a rock where a wheel of
+  width 0.13 m does not.
+Prints microseconds per step (medians of interleaved repeats, stepping loops in C in both) and our
+time over MuJoCo's per scenario. MuJoCo's chassis box does not collide (ours can: it never
+touches these rocks).
 
 Our default (SimOptions.obstacle_substeps = 1 since session 9) takes a step touching a rock as
 one step, split into up to 8 substeps only after a step in which a wheel's slip grew fast (a
@@ -31,6 +41,7 @@ from ernest_cpp import dynamics as D
 from bench_util import median_us, rolling_rover
 
 SPEED = 0.15  # [m/s]
+CYL_Y = "0.7071067811865476 0.7071067811865476 0 0"  # a cylinder's axis (local z) onto the axle (y)
 # Scenario name -> number of rocks. The rocks are D.rock_field(n, seed=7, length=2, x0=0.8): box
 # rocks 6-16 cm, half buried, in x in [0.8, 2.8] m, |y| <= 1 m, the stretch the rover drives
 # over in one repeat (each repeat restarts from the same state in both simulators).
@@ -43,9 +54,14 @@ def rocks(n: int) -> list:
     return D.rock_field(n, seed=7, length=2.0, width=2.0, x0=0.8)
 
 
-def mjcf(p: D.RoverParameters, dt: float, boxes) -> str:
+def mjcf(p: D.RoverParameters, dt: float, boxes, wheel_shape: str = "sphere") -> str:
     """MJCF of the ERNEST model of cpp/dynamics (rover frame: origin between the wheel centres),
-    sphere wheels, and the rocks as static boxes."""
+    and the rocks as static boxes. wheel_shape "sphere": sphere wheels against ground and rocks;
+    "ours": a sphere against the ground (contype / conaffinity 2) and the wheel's cylinder
+    against the rocks (1), one contact per pair (multiccd off), as our simulator."""
+    if wheel_shape not in ("sphere", "ours"):
+        raise ValueError(f"wheel_shape must be 'sphere' or 'ours', not {wheel_shape!r}")
+    ours_shape = wheel_shape == "ours"
     r = p.wheel_radius
     cc, ci, bi = p.chassis_com, p.chassis_inertia, p.bogie_inertia
     g = p.gimbal_point()
@@ -60,22 +76,26 @@ def mjcf(p: D.RoverParameters, dt: float, boxes) -> str:
         return (f'<body name="{name}" pos="{pos[0]} {pos[1]} {pos[2]}">'
                 f'<joint name="{name}_j" type="hinge" axis="0 1 0" armature="{armature}"/>'
                 f'<inertial pos="0 0 0" mass="{p.wheel_assembly_mass}" diaginertia="{wt} {spin} {wt}"/>'
-                f'<geom type="sphere" size="{r}"/></body>')
+                + (f'<geom type="sphere" size="{r}" contype="2" conaffinity="2"/>'
+                   f'<geom type="cylinder" size="{r} {p.wheel_width / 2}" quat="{CYL_Y}"/>'
+                   if ours_shape else f'<geom type="sphere" size="{r}"/>') + '</body>')
 
     def box(b):
         c, s, q = b.centre, b.size, (math.cos(b.yaw / 2), 0.0, 0.0, math.sin(b.yaw / 2))
         return (f'<geom type="box" pos="{c[0]} {c[1]} {c[2]}" size="{s[0] / 2} {s[1] / 2} {s[2] / 2}" '
                 f'quat="{q[0]} {q[1]} {q[2]} {q[3]}"/>')
 
+    flags = '<flag multiccd="disable"/>' if ours_shape else ""
+    ground = ' contype="2" conaffinity="2"' if ours_shape else ""
     fl = p.wheel_centre(0) - g
     fr = p.wheel_centre(1) - g
     z0 = r + 0.005
     return f"""
 <mujoco model="ernest">
-  <option timestep="{dt}" gravity="0 0 -9.81" integrator="implicitfast"/>
+  <option timestep="{dt}" gravity="0 0 -9.81" integrator="implicitfast">{flags}</option>
   <default><geom friction="0.8 0.005 0.0001"/></default>
   <worldbody>
-    <geom name="ground" type="plane" size="50 50 0.1"/>
+    <geom name="ground" type="plane" size="50 50 0.1"{ground}/>
     {''.join(box(b) for b in boxes)}
     <body name="chassis" pos="0 0 {z0}">
       <freejoint/>
@@ -110,9 +130,9 @@ def ours(boxes, substeps: int, stepper=None):
 class Mujoco:
     """The same rover in MuJoCo, rolling at SPEED after 50 steps; reset() returns to that state."""
 
-    def __init__(self, mujoco, p, dt, boxes):
+    def __init__(self, mujoco, p, dt, boxes, wheel_shape="sphere"):
         self.mj = mujoco
-        self.model = mujoco.MjModel.from_xml_string(mjcf(p, dt, boxes))
+        self.model = mujoco.MjModel.from_xml_string(mjcf(p, dt, boxes, wheel_shape))
         self.data = mujoco.MjData(self.model)
         self.ctrl = SPEED / p.wheel_radius
         self.data.ctrl[:4] = self.ctrl
@@ -121,6 +141,21 @@ class Mujoco:
         mujoco.mj_step(self.model, self.data, 50)
         self.qpos, self.qvel = self.data.qpos.copy(), self.data.qvel.copy()
         self.act, self.warm = self.data.act.copy(), self.data.qacc_warmstart.copy()
+
+    def contacts(self, steps):
+        """Steps from the start state one at a time: (most ground contacts, most contacts of one
+        geom pair) seen, to check the like-for-like claims (4 and 1 for our wheel shape)."""
+        self.reset()
+        m, d = self.model, self.data
+        ground, per_pair = 0, 0
+        for _ in range(steps):
+            self.mj.mj_step(m, d)
+            pairs = {}
+            for c in d.contact[:d.ncon]:
+                pairs[(c.geom1, c.geom2)] = pairs.get((c.geom1, c.geom2), 0) + 1
+            ground = max(ground, sum(1 for c in d.contact[:d.ncon] if 0 in (c.geom1, c.geom2)))
+            per_pair = max([per_pair] + list(pairs.values()))
+        return ground, per_pair
 
     def reset(self):
         d = self.data
@@ -152,16 +187,27 @@ def main():
     runs = {}
     for name, n in SCENARIOS.items():
         boxes = rocks(n)
-        runs[(name, "mujoco")] = Mujoco(mujoco, p, dt, boxes)
+        # on flat ground both MuJoCo models are the sphere-wheeled one (nothing for a cylinder to hit)
+        runs[(name, "mujoco")] = Mujoco(mujoco, p, dt, boxes, "ours" if n else "sphere")
+        if n:
+            runs[(name, "mujoco_sphere")] = Mujoco(mujoco, p, dt, boxes, "sphere")
         for sub in ((DEFAULT_SUBSTEPS, OTHER_SUBSTEPS) if n else (DEFAULT_SUBSTEPS,)):
             sim, start = ours(boxes, sub)
             runs[(name, sub)] = (sim, start)
         runs[(name, "ode")] = ours(boxes, DEFAULT_SUBSTEPS, D.Stepper.Ode)
+    for name, n in SCENARIOS.items():  # one contact per wheel on the ground and per wheel-rock pair
+        ground, per_pair = runs[(name, "mujoco")].contacts(steps)
+        if ground > 4 or per_pair > 1:
+            print(f"MuJoCo model not like for like in {name}: {ground} ground contacts, "
+                  f"{per_pair} contacts of one pair")
+            return 1
+    print("checked: MuJoCo (our wheel shape) makes at most 4 ground contacts and one contact per "
+          "geom pair in every step of every scenario, as ours")
     t = {k: [] for k in runs}
     travelled = {}
     for _ in range(repeats):
         for key, r in runs.items():
-            if key[1] == "mujoco":
+            if key[1] in ("mujoco", "mujoco_sphere"):
                 r.reset()
                 x0 = float(r.data.qpos[0])
                 t[key].append(median_us(lambda: r.run(steps), steps, repeats=1))
@@ -177,24 +223,31 @@ def main():
                 travelled[key] = sim.state.position[0] - x0
     med = {k: statistics.median(v) for k, v in t.items()}
 
-    def ratio(name, sub):
-        return statistics.median(a / b for a, b in zip(t[(name, sub)], t[(name, "mujoco")]))
+    def ratio(name, sub, ref="mujoco"):
+        return statistics.median(a / b for a, b in zip(t[(name, sub)], t[(name, ref)]))
 
-    print(f"MuJoCo {mujoco.__version__} (implicitfast, sphere wheels, rigid plane, rocks as boxes) "
-          f"against ours (ODE, M90 soil, Bekker-Wong), dt = {dt} s, {steps} steps x {repeats} "
-          f"interleaved repeats, driving {SPEED} m/s")
-    print(f"| scenario | MuJoCo us/step | ours us/step, default ({DEFAULT_SUBSTEPS} obstacle substep(s)) | "
+    print(f"MuJoCo {mujoco.__version__} (implicitfast, rigid plane, rocks as boxes; wheels: spheres "
+          f"on the ground, against the rocks our wheel's cylinder with one contact per pair, or "
+          f"spheres) against ours (ODE, M90 soil, Bekker-Wong), dt = {dt} s, {steps} steps x "
+          f"{repeats} interleaved repeats, driving {SPEED} m/s")
+    print(f"| scenario | MuJoCo us/step, our wheel shape | ours us/step, default "
+          f"({DEFAULT_SUBSTEPS} obstacle substep(s)) | ratio | MuJoCo us/step, sphere wheels | "
           f"ratio | ours us/step, {OTHER_SUBSTEPS} obstacle substep(s) | ratio | "
-          "ours us/step, ODE's dWorldStep | ratio | travelled ours / MuJoCo [m] |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "ours us/step, ODE's dWorldStep | ratio | travelled ours / MuJoCo (our shape / spheres) [m] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, n in SCENARIOS.items():
         on = f"{med[(name, DEFAULT_SUBSTEPS)]:.2f} | **{ratio(name, DEFAULT_SUBSTEPS):.2f}**"
+        sph = (f"{med[(name, 'mujoco_sphere')]:.2f} | {ratio(name, DEFAULT_SUBSTEPS, 'mujoco_sphere'):.2f}"
+               if n else "(no rocks: same) | —")
         off = (f"{med[(name, OTHER_SUBSTEPS)]:.2f} | {ratio(name, OTHER_SUBSTEPS):.2f}" if n
                else "(no rocks: same) | —")
         ode = f"{med[(name, 'ode')]:.2f} | {ratio(name, 'ode'):.2f}"
-        print(f"| {name} | {med[(name, 'mujoco')]:.2f} | {on} | {off} | {ode} | "
-              f"{travelled[(name, DEFAULT_SUBSTEPS)]:.2f} / {travelled[(name, 'mujoco')]:.2f} |")
-    print("ratio = ours / MuJoCo, median of the per-repeat ratios (target <= 1.0)")
+        far = f"{travelled[(name, 'mujoco')]:.2f}" + (
+            f" / {travelled[(name, 'mujoco_sphere')]:.2f}" if n else "")
+        print(f"| {name} | {med[(name, 'mujoco')]:.2f} | {on} | {sph} | {off} | {ode} | "
+              f"{travelled[(name, DEFAULT_SUBSTEPS)]:.2f} / {far} |")
+    print("ratio = ours / MuJoCo (our wheel shape unless marked), median of the per-repeat ratios "
+          "(target <= 1.0)")
     return 0
 
 
