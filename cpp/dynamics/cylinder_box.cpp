@@ -34,7 +34,9 @@ struct Search {
   Vec3 n = Vec3::Zero();
   int axis = -1;
 
-  double overlap(const Vec3& m) const { return cylinder_box_overlap(m, q, a, r, hl, e); }
+  double overlap(const Vec3& m) const {  // cylinder_box_overlap, inlined
+    return e.dot(m.cwiseAbs()) - m.dot(q) + r * m.cross(a).norm() + hl * std::abs(m.dot(a));
+  }
   // A unit candidate, its sign turned towards the cylinder (the other sign's overlap is larger
   // by 2 |n.q|). False: it separates the shapes.
   bool consider(Vec3 m, int kind) {
@@ -47,103 +49,169 @@ struct Search {
     const double len = v.norm();
     return len < 1e-12 || consider(v / len, kind);
   }
-  // A point of B - A (the box's support point at m minus the cylinder's at -m): the overlap along
-  // any n is at least n.x (the support function's tangent plane at m), the pruning bound.
-  Vec3 difference_point(const Vec3& m) const {
-    const double ma = m.dot(a);
-    Vec3 x = e.cwiseProduct(m.cwiseSign()) - q + (ma < 0.0 ? -hl : hl) * a;
-    const Vec3 perp = m - ma * a;
-    const double len = perp.norm();
-    if (len > 1e-12) x += (r / len) * perp;
-    return x;
-  }
-  void rim_edges(int i);
-  void rim_piece(int i, double lo, double hi, const Vec2& p2, const Vec2& al);
+  // A smooth piece of the overlap on the great circle normal to e_i (rim_piece below).
+  struct Piece {
+    int i;
+    Vec2 lo, hi, g, al, al_unit, g_unit;
+    double rho, gn;  // |al|, |G|
+    double bound;    // a lower bound of the overlap on it
+  };
+  std::array<Piece, 24> pieces;
+  int n_pieces = 0;
+  void add_pieces(int i);
+  void add_piece(int i, const Vec2& lo, const Vec2& hi, const Vec2& p2, const Vec2& al);
+  double lower_bound(const Piece& p, const Vec2& l, const Vec2& h) const;
+  void rim_piece(const Piece& p);
+  void rim_edges();
 };
 
-Vec3 on_circle(int i, double cs, double sn) {  // the unit vector at angle phi in plane (j, k)
-  Vec3 m = Vec3::Zero();
-  m[(i + 1) % 3] = cs;
-  m[(i + 2) % 3] = sn;
-  return m;
+double cross2(const Vec2& s, const Vec2& t) { return s.x() * t.y() - s.y() * t.x(); }
+
+// Whether direction d lies on the arc from unit lo to unit hi (counterclockwise, < pi).
+bool on_arc(const Vec2& d, const Vec2& lo, const Vec2& hi) {
+  return cross2(lo, d) >= 0.0 && cross2(d, hi) >= 0.0;
 }
 
-// Least n.x over the arc of directions from angle lo to hi (< pi) in plane (j, k).
-double arc_min(const Vec2& x, double lo, double hi) {
-  const Vec2 ml(std::cos(lo), std::sin(lo)), mh(std::cos(hi), std::sin(hi));
-  const auto cross = [](const Vec2& s, const Vec2& t) { return s.x() * t.y() - s.y() * t.x(); };
-  if (cross(ml, -x) >= 0.0 && cross(-x, mh) >= 0.0) return -x.norm();
-  return std::min(ml.dot(x), mh.dot(x));
+// Least m.x over the arc of unit m from lo to hi.
+double arc_min(const Vec2& x, const Vec2& lo, const Vec2& hi) {
+  if (on_arc(-x, lo, hi)) return -x.norm();
+  return std::min(lo.dot(x), hi.dot(x));
 }
 
-// The box edges along e_i against the rims: the great circle of n normal to e_i.
-void Search::rim_edges(int i) {
+// The box edges along e_i against the rims: the great circle of n normal to e_i, in the plane
+// (j, k) = (i + 1, i + 2); each quadrant is one edge's (at (sj e_j, sk e_k)) normal cone.
+void Search::add_pieces(int i) {
   const int j = (i + 1) % 3, k = (i + 2) % 3;
-  const Vec2 al(a[j], a[k]), qq(q[j], q[k]);
-  const double half_pi = 0.5 * M_PI;
-  for (int quad = 0; quad < 4; ++quad) {  // the edge at (sj e_j, sk e_k): n in its quadrant
-    const double sj = quad == 0 || quad == 3 ? 1.0 : -1.0, sk = quad < 2 ? 1.0 : -1.0;
-    const double lo = quad * half_pi, hi = lo + half_pi;
-    const Vec3 mid = on_circle(i, sj * M_SQRT1_2, sk * M_SQRT1_2);
-    const Vec3 x = difference_point(mid);
-    if (arc_min(Vec2(x[j], x[k]), lo, hi) >= best) continue;
-    const Vec2 p2(sj * e[j] - qq.x(), sk * e[k] - qq.y());
+  const Vec2 al(a[j], a[k]);
+  static const std::array<Vec2, 5> kEnds = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1),
+                                            Vec2(1, 0)};
+  for (int quad = 0; quad < 4; ++quad) {
+    const Vec2 &lo = kEnds[quad], &hi = kEnds[quad + 1];
+    const Vec2 corner = lo + hi;  // (sj, sk)
+    const Vec2 p2(corner.x() * e[j] - q[j], corner.y() * e[k] - q[k]);
+    // f = m.P + r sqrt(1 - c^2) + hl |c| >= min m.P + min(r, hl) (concave in |c| <= 1): with
+    // m = (sj cos t, sk sin t), t in [0, pi / 2], m.P = A cos t + B sin t
+    const double pa = corner.x() * p2.x(), pb = corner.y() * p2.y();
+    const double quad_min = pa < 0.0 && pb < 0.0 ? -std::hypot(pa, pb) : std::min(pa, pb);
+    if (quad_min + std::min(r, hl) >= best) continue;
     // The cross axes +-(-al.y, al.x) inside the quadrant split it where n.a changes sign.
-    double split = lo;
+    Vec2 split = lo;
     for (double s : {1.0, -1.0}) {
       const Vec2 c(-s * al.y(), s * al.x());
-      if (c.x() * sj > 0.0 && c.y() * sk > 0.0) {
-        split = std::atan2(c.y(), c.x());
-        if (split < lo) split += 2.0 * M_PI;
-      }
+      if (c.x() * corner.x() > 0.0 && c.y() * corner.y() > 0.0) split = c.normalized();
     }
-    if (split > lo && split < hi) {
-      rim_piece(i, lo, split, p2, al);
-      rim_piece(i, split, hi, p2, al);
+    if (split != lo) {
+      add_piece(i, lo, split, p2, al);
+      add_piece(i, split, hi, p2, al);
     } else {
-      rim_piece(i, lo, hi, p2, al);
+      add_piece(i, lo, hi, p2, al);
     }
   }
 }
 
-// One smooth piece: f(phi) = m.G + r sqrt(1 - (m.al)^2), G = P + sigma hl al, with m = (cos phi,
+// One smooth piece: f(m) = m.G + r sqrt(1 - (m.al)^2), G = P + sigma hl al, with m = (cos phi,
 // sin phi), P the edge's corner minus the cylinder's centre and sigma = sign(m.al) on the piece
 // (the rim at -sigma a): the support function of an ellipse (the rim seen along e_i) moved by G.
-// It can have two minima and a maximum close together (a point near the ellipse's evolute), so
-// sampling f' is not enough: branch and bound over the arc, an arc dropped where the lower bound
-// (the tangent plane at its middle direction) is not below the best overlap so far, down to
-// leaves of kLeaf rad, where f' going from - to + brackets a minimum refined by Newton (kept in
-// its bracket: bisection where a step leaves it).
-void Search::rim_piece(int i, double lo, double hi, const Vec2& p2, const Vec2& al) {
-  constexpr double kLeaf = M_PI / 128;
-  const int j = (i + 1) % 3, k = (i + 2) % 3;
-  const double mid0 = 0.5 * (lo + hi);
-  const double sigma = std::cos(mid0) * al.x() + std::sin(mid0) * al.y() < 0.0 ? -1.0 : 1.0;
-  const Vec2 g = p2 + sigma * hl * al;
-  const auto derivs = [&](double phi, double& d1, double& d2) {
-    const double cs = std::cos(phi), sn = std::sin(phi);
-    const double c = cs * al.x() + sn * al.y(), cp = -sn * al.x() + cs * al.y();
-    const double root = std::max(std::sqrt(std::max(0.0, 1.0 - c * c)), 1e-12);
-    d1 = -sn * g.x() + cs * g.y() - r * c * cp / root;
-    d2 = -(cs * g.x() + sn * g.y()) -
-         r * ((cp * cp - c * c) / root + c * c * cp * cp / (root * root * root));
+void Search::add_piece(int i, const Vec2& lo, const Vec2& hi, const Vec2& p2, const Vec2& al) {
+  Piece& p = pieces[n_pieces];
+  p.i = i;
+  p.lo = lo;
+  p.hi = hi;
+  p.al = al;
+  p.g = p2 + ((lo + hi).dot(al) < 0.0 ? -hl : hl) * al;
+  p.rho = al.norm();
+  p.al_unit = p.rho > 0.0 ? Vec2(al / p.rho) : Vec2(1.0, 0.0);
+  p.gn = p.g.norm();
+  p.g_unit = p.gn > 0.0 ? Vec2(p.g / p.gn) : Vec2(1.0, 0.0);
+  p.bound = lower_bound(p, lo, hi);
+  if (p.bound < best) ++n_pieces;
+}
+
+// Lower bounds of f on the arc of unit m from l to h (counterclockwise, < pi; no trigonometry):
+//  - the tangent plane at its middle direction (m.x <= f(m) for the ellipse's support point x);
+//  - min m.G + r sqrt(1 - max (m.al)^2);
+//  - from each end, f'' >= -f >= -F (f + f'' is the ellipse's radius of curvature, >= 0; F an
+//    upper bound of f on the arc): f(l + t) >= f(l) + f'(l) t - F t^2 / 2, least at t = 0 or at
+//    the width w; likewise from h. These decide the arcs next to a kink where the minimum is.
+// The cheapest first: most arcs are dropped by the first.
+double Search::lower_bound(const Piece& p, const Vec2& l, const Vec2& h) const {
+  const auto linear_min = [&](const Vec2& x, const Vec2& x_unit, double x_norm) {
+    return on_arc(-x_unit, l, h) ? -x_norm : std::min(l.dot(x), h.dot(x));
   };
-  const auto try_angle = [&](double phi) {
-    const Vec3 m = on_circle(i, std::cos(phi), std::sin(phi));
+  double cmax = std::max(std::abs(l.dot(p.al)), std::abs(h.dot(p.al)));
+  if (on_arc(p.al_unit, l, h) || on_arc(-p.al_unit, l, h)) cmax = p.rho;
+  const double separable =
+      linear_min(p.g, p.g_unit, p.gn) + r * std::sqrt(std::max(0.0, 1.0 - cmax * cmax));
+  if (separable >= best) return separable;
+  const Vec2 m = (l + h).normalized();
+  const double c = m.dot(p.al), root = std::sqrt(std::max(0.0, 1.0 - c * c));
+  const Vec2 x = p.g + (root > 1e-12 ? r / root : 0.0) * (m - c * p.al);  // the support point
+  const double tangent = arc_min(x, l, h);
+  if (tangent >= best) return tangent;
+  const double chord = (h - l).norm(), w = chord * (1.0 + chord * chord / 12.0);  // >= the angle
+  const auto value = [&](const Vec2& mm, double& f, double& d1) {
+    const Vec2 mp(-mm.y(), mm.x());
+    const double cc = mm.dot(p.al), cp = mp.dot(p.al);
+    const double rt = std::max(std::sqrt(std::max(0.0, 1.0 - cc * cc)), 1e-12);
+    f = mm.dot(p.g) + r * rt;
+    d1 = mp.dot(p.g) - r * cc * cp / rt;
+    return rt > 1e-9;  // f' is unbounded where the normal is the axis
+  };
+  double fl, dl, fh, dh;
+  if (!value(l, fl, dl) || !value(h, fh, dh)) return std::max(separable, tangent);
+  // f <= max(f(l), f(h)) / cos(w / 2) on the arc: a support function is sublinear, and each m of
+  // the arc is l s + h t with s, t >= 0, s + t <= 1 / cos(w / 2) = 2 / |l + h|
+  const double fmax = std::max({fl, fh, 0.0}) * 2.0 / (l + h).norm();
+  const auto end = [&](double f, double d1) {
+    return std::min(f, f + d1 * w - 0.5 * fmax * w * w);
+  };
+  return std::max({separable, tangent, end(fl, dl), end(fh, -dh)});
+}
+
+// All pieces, the most promising (least bound) first, each dropped once its bound is not below
+// the best overlap so far.
+void Search::rim_edges() {
+  for (int i = 0; i < 3; ++i) add_pieces(i);
+  std::array<int, 24> order;
+  for (int k = 0; k < n_pieces; ++k) order[k] = k;
+  std::sort(order.begin(), order.begin() + n_pieces,
+            [&](int x, int y) { return pieces[x].bound < pieces[y].bound; });
+  for (int k = 0; k < n_pieces; ++k)
+    if (pieces[order[k]].bound < best) rim_piece(pieces[order[k]]);
+}
+
+// The minimum of f on a piece. f can have two minima and a maximum close together (a point near
+// the ellipse's evolute), so sampling f' is not enough: branch and bound over the arc, an arc
+// dropped where lower_bound is not below the best overlap so far, down to leaves of about kLeaf
+// rad, where f' going from - to + brackets a minimum refined by Newton (kept in its bracket:
+// bisection where a step leaves it).
+void Search::rim_piece(const Piece& p) {
+  constexpr double kLeaf = M_PI / 16;
+  const double leaf_chord = 2.0 * std::sin(0.5 * kLeaf);
+  const Vec2 &g = p.g, &al = p.al;
+  const auto derivs = [&](const Vec2& m, double& d1, double& d2) {
+    const Vec2 mp(-m.y(), m.x());
+    const double c = m.dot(al), cp = mp.dot(al);
+    const double root = std::max(std::sqrt(std::max(0.0, 1.0 - c * c)), 1e-12);
+    d1 = mp.dot(g) - r * c * cp / root;
+    d2 = -m.dot(g) - r * ((cp * cp - c * c) / root + c * c * cp * cp / (root * root * root));
+  };
+  const auto try_dir = [&](const Vec2& m2) {
+    Vec3 m = Vec3::Zero();
+    m[(p.i + 1) % 3] = m2.x();
+    m[(p.i + 2) % 3] = m2.y();
     const double d = overlap(m);  // exact at any direction: an upper bound of the depth
     if (d < best) best = d, n = m, axis = RimEdge;
   };
-  std::array<std::array<double, 2>, 32> stack;
+  std::array<std::array<Vec2, 2>, 32> stack;
   int top = 0;
-  stack[top++] = {lo, hi};
+  stack[top++] = {p.lo, p.hi};
   while (top > 0) {
     const auto [l, h] = stack[--top];
-    const double mid = 0.5 * (l + h);
-    const Vec3 mm = on_circle(i, std::cos(mid), std::sin(mid));
-    const Vec3 x = difference_point(mm);
-    if (arc_min(Vec2(x[j], x[k]), l, h) >= best) continue;
-    if (h - l > kLeaf && top + 2 <= static_cast<int>(stack.size())) {
-      try_angle(mid);
+    if (lower_bound(p, l, h) >= best) continue;
+    if ((h - l).norm() > leaf_chord && top + 2 <= static_cast<int>(stack.size())) {
+      const Vec2 mid = (l + h).normalized();
+      try_dir(mid);
       stack[top++] = {l, mid};
       stack[top++] = {mid, h};
       continue;
@@ -152,14 +220,16 @@ void Search::rim_piece(int i, double lo, double hi, const Vec2& p2, const Vec2& 
     derivs(l, dl, d2);
     derivs(h, dh, d2);
     if (!(dl < 0.0 && dh >= 0.0)) {  // no minimum inside: the ends
-      try_angle(l);
-      try_angle(h);
+      try_dir(l);
+      try_dir(h);
       continue;
     }
-    double a0 = l, b0 = h, t = mid;
+    // Newton in the angle t from l: m(t) = cos t l + sin t l_perp, t in [0, width]
+    const Vec2 lp(-l.y(), l.x());
+    double a0 = 0.0, b0 = std::atan2(cross2(l, h), l.dot(h)), t = 0.5 * b0;
     for (int it = 0; it < 40; ++it) {
       double f1, f2;
-      derivs(t, f1, f2);
+      derivs(std::cos(t) * l + std::sin(t) * lp, f1, f2);
       (f1 < 0.0 ? a0 : b0) = t;
       double next = f2 > 0.0 ? t - f1 / f2 : 0.5 * (a0 + b0);
       if (!(next > a0 && next < b0)) next = 0.5 * (a0 + b0);
@@ -167,7 +237,7 @@ void Search::rim_piece(int i, double lo, double hi, const Vec2& p2, const Vec2& 
       t = next;
       if (done || b0 - a0 < 1e-14) break;
     }
-    try_angle(t);
+    try_dir(std::cos(t) * l + std::sin(t) * lp);
   }
 }
 
@@ -220,7 +290,7 @@ bool cylinder_box_contact(const Vec3& c, const Vec3& u, double r, double hl, con
     if (d < 0.0) return false;
     if (d < s.best) s.best = d, s.n = m, s.axis = Vertex;
   }
-  for (int i = 0; i < 3; ++i) s.rim_edges(i);  // RimEdge
+  s.rim_edges();  // RimEdge
   if (!(s.best >= 0.0)) return false;          // NaN poses: no contact
 
   // The point: ODE's clipping (collision_cylinder_box.cpp), exact. Where the normal is within
