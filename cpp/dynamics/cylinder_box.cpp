@@ -318,28 +318,40 @@ bool cylinder_box_contact(const Vec3& c, const Vec3& u, double r, double hl, con
       if (wsum <= 0.0) wsum = 1.0, wx = p0 + 0.5 * (t0 + t1) * d;
     }
   } else {
-    constexpr int kSides = 16, kMax = kSides + 8;
-    std::array<Vec3, kMax> poly, next;
+    constexpr int kSides = 16, kMax = kSides + 8;  // each plane adds at most one vertex
+    static const std::array<std::array<double, 2>, kSides> kCircle = [] {
+      std::array<std::array<double, 2>, kSides> t{};
+      for (int v = 0; v < kSides; ++v)
+        t[v] = {std::cos(2.0 * M_PI * v / kSides), std::sin(2.0 * M_PI * v / kSides)};
+      return t;
+    }();
+    std::array<Vec3, kMax> buf_a, buf_b;
+    Vec3 *poly = buf_a.data(), *next = buf_b.data();
     int count = kSides;
-    const Vec3 cc = q - side * hl * a, u1 = w, u2 = a.cross(w);
-    for (int v = 0; v < kSides; ++v) {
-      const double ang = 2.0 * M_PI * v / kSides;
-      poly[v] = cc + r * (std::cos(ang) * u1 + std::sin(ang) * u2);
-    }
-    // Sutherland–Hodgman against the 6 box planes and depth >= 0 (plane.y <= offset)
+    const Vec3 cc = q - side * hl * a, u1 = r * w, u2 = r * a.cross(w);
+    for (int v = 0; v < kSides; ++v) poly[v] = cc + kCircle[v][0] * u1 + kCircle[v][1] * u2;
+    // Sutherland–Hodgman against the box planes the cap crosses (its reach along e_k is
+    // r sqrt(1 - a_k^2) from its centre) and depth >= 0 (plane.y <= offset)
     for (int pl = 0; pl < 7 && count > 0; ++pl) {
+      if (pl < 6) {
+        const int k = pl / 2;
+        const double reach = r * std::sqrt(std::max(0.0, 1.0 - a[k] * a[k]));
+        if ((pl % 2 ? -cc[k] : cc[k]) + reach <= e[k]) continue;
+      }
       const Vec3 pn = pl < 6 ? Vec3((pl % 2 ? -1.0 : 1.0) * Vec3::Unit(pl / 2)) : n;
       const double off = pl < 6 ? e[pl / 2] : hb;
       int m = 0;
-      for (int v = 0; v < count; ++v) {
-        const Vec3 &p = poly[v], &pq = poly[(v + 1) % count];
-        const double dp = pn.dot(p) - off, dq = pn.dot(pq) - off;
+      double dp = pn.dot(poly[0]) - off;
+      for (int v = 0; v < count && m + 2 <= kMax; ++v) {
+        const Vec3 &p = poly[v], &pq = poly[v + 1 < count ? v + 1 : 0];
+        const double dq = pn.dot(pq) - off;
         if (dp <= 0.0) next[m++] = p;
-        if (((dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0)) && m < kMax)
+        if ((dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0))
           next[m++] = p + dp / (dp - dq) * (pq - p);
+        dp = dq;
       }
-      count = std::min(m, kMax);
-      std::copy(next.begin(), next.begin() + count, poly.begin());
+      count = m;
+      std::swap(poly, next);
     }
     for (int v = 0; v < count; ++v) {
       const double dy = std::max(0.0, hb - poly[v].dot(n));

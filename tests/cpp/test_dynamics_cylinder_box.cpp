@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -20,6 +22,7 @@
 #include "ernest/dynamics/obstacle_contacts.hpp"
 #include "ernest/dynamics/ode_init.hpp"
 #include "ernest/dynamics/rover_parameters.hpp"
+#include "ernest/dynamics/rover_sim.hpp"
 
 using namespace ernest::dynamics;
 using detail::CylinderBoxContact;
@@ -380,6 +383,51 @@ void compare_with_ode(bool any_axis, int count) {
   EXPECT_LT(q(angle, 0.5), 1e-6);  // the same axis (up to ODE's rounding) in most poses
   dGeomDestroy(cyl);
   dGeomDestroy(box);
+}
+
+// The exact contact as the dContactGeom near() records: the geom order, normal and sides of
+// merge_contact_points(dCollide(cylinder, box)).
+TEST(CylinderBox, ContactGeomHasOdesConventions) {
+  detail::init_ode_once();
+  dGeomID cyl = dCreateCylinder(nullptr, kR, 2 * kHl), box = dCreateBox(nullptr, 0.6, 0.6, 0.2);
+  const Mat3 rc = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), kY).toRotationMatrix();
+  dMatrix3 o;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) o[4 * i + j] = j < 3 ? rc(i, j) : 0.0;
+  const Vec3 c(0.05, 0.0, 0.1 + kR - 0.01);
+  dGeomSetPosition(cyl, c.x(), c.y(), c.z());
+  dGeomSetRotation(cyl, o);
+  dContactGeom pts[8];
+  const int n = dCollide(cyl, box, 8, pts, sizeof(dContactGeom));
+  ASSERT_GT(n, 0);
+  const dContactGeom ode = detail::merge_contact_points(pts, n);
+  CylinderBoxContact k;
+  ASSERT_TRUE(contact(c, kY, Vec3::Zero(), Mat3::Identity(), Vec3(0.3, 0.3, 0.1), k));
+  const dContactGeom ours = detail::to_contact_geom(k, cyl, box);
+  EXPECT_EQ(ours.g1, ode.g1);
+  EXPECT_EQ(ours.g2, ode.g2);
+  EXPECT_EQ(ours.side1, ode.side1);
+  EXPECT_EQ(ours.side2, ode.side2);
+  EXPECT_NEAR(ours.depth, ode.depth, 1e-12);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(ours.normal[i], ode.normal[i], 1e-12);
+    EXPECT_NEAR(ours.pos[i], ode.pos[i], 1e-12);
+  }
+  dGeomDestroy(cyl);
+  dGeomDestroy(box);
+}
+
+TEST(CylinderBox, OptionIsValidated) {
+  SimOptions o;
+  EXPECT_EQ(o.wheel_obstacle_contact, WheelObstacleContact::Exact);
+  o.validate();
+  o.wheel_obstacle_contact = static_cast<WheelObstacleContact>(7);
+  try {
+    o.validate();
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("wheel_obstacle_contact = 7"), std::string::npos);
+  }
 }
 
 TEST(CylinderBox, AgainstOdeRoverPoses) { compare_with_ode(false, 3000); }
