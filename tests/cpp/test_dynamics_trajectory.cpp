@@ -223,10 +223,12 @@ constexpr Pinned kPinnedOde{0x6e9b20ecdb9723ddull, 0xd9c34ab7c133969eull, 0x2deb
                             0xdc06c50cfd86400bull, 0x6da0a47deb573da4ull};
 constexpr Pinned kPinnedOwn{0x99302755834fb1ffull, 0x90e13077536399faull, 0xe8dce32c749cf013ull,
                             0x93dfc69f6efc7079ull, 0x556e38d413ba4ce1ull};
-constexpr Pinned kPinnedOdeExact{0x6e9b20ecdb9723ddull, 0x0ull, 0x2deb6a8f8f8e4976ull, 0x0ull,
-                                 0x0ull};
-constexpr Pinned kPinnedOwnExact{0x99302755834fb1ffull, 0x0ull, 0xe8dce32c749cf013ull, 0x0ull,
-                                 0x0ull};
+constexpr Pinned kPinnedOdeExact{0x6e9b20ecdb9723ddull, 0xd5724314c1f8f10cull,
+                                 0x2deb6a8f8f8e4976ull, 0x359059f3c9085b85ull,
+                                 0x92ddabd05def0a3aull};
+constexpr Pinned kPinnedOwnExact{0x99302755834fb1ffull, 0x81ac3d889230522bull,
+                                 0xe8dce32c749cf013ull, 0x3fad004e74165e74ull,
+                                 0x0b171c5885a72104ull};
 
 void expect_pinned(const char* name, std::uint64_t got, std::uint64_t pinned) {
   EXPECT_EQ(got, pinned) << name << ": the trajectory's bits changed; if the change is meant "
