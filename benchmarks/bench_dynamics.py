@@ -11,7 +11,9 @@ one step, split into up to 8 substeps only after a step in which a wheel's slip 
 wheel surging up a rock face: obstacle_contacts.cpp); before session 9 every such step was 8
 substeps. The rock scenarios are timed with the default (what training runs) and with the old
 8 substeps, for comparison. Since session 11 the default steps the bodies with our own island
-step (SimOptions.stepper = Own); every scenario is also timed with ODE's dWorldStep (Ode).
+step (SimOptions.stepper = Own); every scenario is also timed with ODE's dWorldStep (Ode). Since
+session 12 the rock scenarios are also timed with the exact wheel–rock contact
+(SimOptions.wheel_obstacle_contact = Exact, cpp/dynamics/cylinder_box.hpp; not the default).
 
     pip install mujoco          (benchmark-only extra: pip install '.[bench]')
     ./run bench dynamics        (runs bench_dynamics.cpp, then this script)
@@ -100,9 +102,9 @@ def mjcf(p: D.RoverParameters, dt: float, boxes) -> str:
 </mujoco>"""
 
 
-def ours(boxes, substeps: int, stepper=None):
+def ours(boxes, substeps: int, stepper=None, contact=None):
     """Our rover on M90 with these rocks, rolling at SPEED after 50 steps: (sim, start snapshot)."""
-    sim = rolling_rover(boxes, SPEED, substeps, stepper=stepper)
+    sim = rolling_rover(boxes, SPEED, substeps, stepper=stepper, contact=contact)
     sim.step_n(50)
     return sim, sim.snapshot()
 
@@ -157,6 +159,9 @@ def main():
             sim, start = ours(boxes, sub)
             runs[(name, sub)] = (sim, start)
         runs[(name, "ode")] = ours(boxes, DEFAULT_SUBSTEPS, D.Stepper.Ode)
+        if n:
+            runs[(name, "exact")] = ours(boxes, DEFAULT_SUBSTEPS,
+                                         contact=D.WheelObstacleContact.Exact)
     t = {k: [] for k in runs}
     travelled = {}
     for _ in range(repeats):
@@ -185,14 +190,17 @@ def main():
           f"interleaved repeats, driving {SPEED} m/s")
     print(f"| scenario | MuJoCo us/step | ours us/step, default ({DEFAULT_SUBSTEPS} obstacle substep(s)) | "
           f"ratio | ours us/step, {OTHER_SUBSTEPS} obstacle substep(s) | ratio | "
-          "ours us/step, ODE's dWorldStep | ratio | travelled ours / MuJoCo [m] |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "ours us/step, ODE's dWorldStep | ratio | ours us/step, Exact wheel-rock contact | ratio | "
+          "travelled ours / MuJoCo [m] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, n in SCENARIOS.items():
         on = f"{med[(name, DEFAULT_SUBSTEPS)]:.2f} | **{ratio(name, DEFAULT_SUBSTEPS):.2f}**"
         off = (f"{med[(name, OTHER_SUBSTEPS)]:.2f} | {ratio(name, OTHER_SUBSTEPS):.2f}" if n
                else "(no rocks: same) | —")
         ode = f"{med[(name, 'ode')]:.2f} | {ratio(name, 'ode'):.2f}"
-        print(f"| {name} | {med[(name, 'mujoco')]:.2f} | {on} | {off} | {ode} | "
+        exact = (f"{med[(name, 'exact')]:.2f} | {ratio(name, 'exact'):.2f}" if n
+                 else "(no rocks: same) | —")
+        print(f"| {name} | {med[(name, 'mujoco')]:.2f} | {on} | {off} | {ode} | {exact} | "
               f"{travelled[(name, DEFAULT_SUBSTEPS)]:.2f} / {travelled[(name, 'mujoco')]:.2f} |")
     print("ratio = ours / MuJoCo, median of the per-repeat ratios (target <= 1.0)")
     return 0

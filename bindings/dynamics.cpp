@@ -210,10 +210,10 @@ void bind_dynamics(py::module_& m) {
                      "(cpp/dynamics/island_step.hpp), the same step to ~1e-10, falling back to "
                      "dWorldStep where it does not reproduce it")
       .def_readwrite("wheel_obstacle_contact", &SimOptions::wheel_obstacle_contact,
-                     "WheelObstacleContact.Exact: a wheel's contact with a rock by the exact "
-                     "separating-axis theorem of a cylinder and a box (depth, normal; the point "
-                     "at the depth-weighted centre of the deepest features); "
-                     "WheelObstacleContact.Ode: ODE's dCollideCylinderBox, its points merged")
+                     "WheelObstacleContact.Ode (default): ODE's dCollideCylinderBox, its points "
+                     "merged; WheelObstacleContact.Exact: a wheel's contact with a rock by the "
+                     "exact separating-axis theorem of a cylinder and a box (depth, normal; the "
+                     "point at the depth-weighted centre of the deepest features)")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,

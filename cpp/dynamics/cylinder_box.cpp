@@ -294,9 +294,10 @@ bool cylinder_box_contact(const Vec3& c, const Vec3& u, double r, double hl, con
   if (!(s.best >= 0.0)) return false;          // NaN poses: no contact
 
   // The point: ODE's clipping (collision_cylinder_box.cpp), exact. Where the normal is within
-  // acos 0.9 of normal to the axis, the cylinder's generator nearest the box clipped to the box;
-  // else its cap nearest the box (a 16-gon) clipped to the box and to the depth >= 0 side. The
-  // points' depths h_B(n) - y.n weight them (merge_contact_points).
+  // acos 0.9 of normal to the axis, the cylinder's generator nearest the box clipped to the box,
+  // its ends weighted by their depths h_B(n) - y.n (what merge_contact_points makes of ODE's two
+  // points); else its cap nearest the box (a 16-gon) clipped to the box and to the depth >= 0
+  // side, and the depth-weighted centroid of that area.
   const Vec3& n = s.n;
   const double na = n.dot(a), hb = e.dot(n.cwiseAbs()), side = na < 0.0 ? -1.0 : 1.0;
   Vec3 w = -(n - na * a);  // the cylinder's radial direction towards the box
@@ -353,10 +354,17 @@ bool cylinder_box_contact(const Vec3& c, const Vec3& u, double r, double hl, con
       count = m;
       std::swap(poly, next);
     }
-    for (int v = 0; v < count; ++v) {
-      const double dy = std::max(0.0, hb - poly[v].dot(n));
-      wsum += dy;
-      wx += dy * poly[v];
+    // The depth-weighted centroid of the clipped cap (depth d linear on it): over each triangle
+    // of a fan, int d dA = A (d0 + d1 + d2) / 3 and int d x dA = A / 12 (sum d_i x_i +
+    // sum d_i sum x_i). A vertex mean would lean towards the arc (many vertices) and jump as
+    // vertices appear.
+    for (int v = 1; v + 1 < count; ++v) {
+      const Vec3 &x0 = poly[0], &x1 = poly[v], &x2 = poly[v + 1];
+      const double area = 0.5 * (x1 - x0).cross(x2 - x0).norm();
+      const double d0 = std::max(0.0, hb - x0.dot(n)), d1 = std::max(0.0, hb - x1.dot(n)),
+                   d2 = std::max(0.0, hb - x2.dot(n));
+      wsum += area * (d0 + d1 + d2) / 3.0;
+      wx += area / 12.0 * (d0 * x0 + d1 * x1 + d2 * x2 + (d0 + d1 + d2) * (x0 + x1 + x2));
     }
   }
   if (wsum > 0.0) point = wx / wsum;

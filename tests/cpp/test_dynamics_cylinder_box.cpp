@@ -419,7 +419,8 @@ TEST(CylinderBox, ContactGeomHasOdesConventions) {
 
 TEST(CylinderBox, OptionIsValidated) {
   SimOptions o;
-  EXPECT_EQ(o.wheel_obstacle_contact, WheelObstacleContact::Exact);
+  EXPECT_EQ(o.wheel_obstacle_contact, WheelObstacleContact::Ode);
+  o.wheel_obstacle_contact = WheelObstacleContact::Exact;
   o.validate();
   o.wheel_obstacle_contact = static_cast<WheelObstacleContact>(7);
   try {

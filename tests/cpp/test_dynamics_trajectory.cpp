@@ -209,13 +209,13 @@ std::uint64_t snapshot_restore(Config stepper) {
 // pair by joint pair: the same step to rounding (test_dynamics_island_step: ~1e-15 m per step from
 // the same state), other last bits, so all five were pinned for Own (kPinnedOwn). The Ode path
 // (dWorldStep) keeps the session-10 pins (kPinnedOde), unchanged: nothing on it moved.
-// Session 12: SimOptions::wheel_obstacle_contact's default became Exact (a wheel's contact with a
-// rock by the exact separating-axis theorem, cpp/dynamics/cylinder_box.hpp, instead of ODE's
-// cylinder-box merged: another depth, normal and point where ODE's axis is not the exact one,
-// e.g. a box edge against a rim, and other last bits where it is), which moves rock_field, batch
+// Session 12: SimOptions::wheel_obstacle_contact (the default, Ode: ODE's cylinder-box merged, as
+// before) gained Exact (a wheel's contact with a rock by the exact separating-axis theorem,
+// cpp/dynamics/cylinder_box.hpp: another depth, normal and point where ODE's axis is not the exact
+// one, e.g. a box edge against a rim, other last bits where it is), which moves rock_field, batch
 // and snapshot_restore; flat_m90 and slope have no rocks and keep their pins. kPinnedOwn and
-// kPinnedOde (with WheelObstacleContact::Ode, unchanged) stay; kPinnedOwnExact and kPinnedOdeExact
-// pin the new default on both steppers.
+// kPinnedOde (the default contact) did not move; kPinnedOwnExact and kPinnedOdeExact pin Exact on
+// both steppers.
 struct Pinned {
   std::uint64_t flat_m90, rock_field, slope, batch, snapshot_restore;
 };
@@ -239,7 +239,7 @@ void expect_pinned(const char* name, std::uint64_t got, std::uint64_t pinned) {
 }  // namespace
 
 // Each pinned scenario on both steppers, the default (Own) and ODE's dWorldStep, and with both
-// wheel–rock contacts, the default (Exact) and ODE's collider.
+// wheel–rock contacts, the default (ODE's collider) and Exact.
 class TrajectoryHash : public ::testing::TestWithParam<Config> {
  protected:
   const Pinned& pinned() const {

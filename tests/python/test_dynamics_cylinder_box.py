@@ -1,5 +1,5 @@
 """The wheel–rock contact (SimOptions.wheel_obstacle_contact; cpp/dynamics/cylinder_box.hpp) from
-Python: the option and its default, and a rover driving into a rock with the exact contact and
+Python: the option and its default (Ode), and a rover driving into a rock with the exact contact and
 with ODE's collider: both touch it, stop at the same place to within the contact's compliance
 (1 mm), and neither diverges."""
 
@@ -26,11 +26,11 @@ def _drive(contact, steps: int = 400):
 
 
 def test_option_default_and_binding():
-    assert D.SimOptions().wheel_obstacle_contact == D.WheelObstacleContact.Exact
+    assert D.SimOptions().wheel_obstacle_contact == D.WheelObstacleContact.Ode
     o = D.SimOptions()
-    o.wheel_obstacle_contact = D.WheelObstacleContact.Ode
+    o.wheel_obstacle_contact = D.WheelObstacleContact.Exact
     o.validate()
-    assert o.wheel_obstacle_contact == D.WheelObstacleContact.Ode
+    assert o.wheel_obstacle_contact == D.WheelObstacleContact.Exact
     assert "exact" in D.SimOptions.wheel_obstacle_contact.__doc__.lower()
 
 
