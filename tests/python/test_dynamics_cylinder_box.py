@@ -40,5 +40,6 @@ def test_exact_and_ode_contacts_drive_into_a_rock_alike():
     assert n_exact > 50 and n_ode > 50
     x_exact, x_ode = exact.state.position[0], ode.state.position[0]
     assert np.isfinite(x_exact) and np.isfinite(x_ode)
-XX
+    # the same stall: positions within 1 mm (measured: 0.02 mm; the contacts differ by mm where
+    # a rock's edge meets a wheel's rim)
     assert abs(x_exact - x_ode) < 1e-3, (x_exact, x_ode)
