@@ -9,9 +9,11 @@
 //   - the three great circles normal to a box axis e_i (box edge along e_i against the rim): on
 //     each, the overlap is piecewise smooth in the angle, with kinks at the face normals and at
 //     the cross axis (where n.a changes sign and the rim changes end); each smooth piece is an
-//     ellipse's support function, minimised by safeguarded Newton (RimEdge).
-// The first two need no iteration; a piece of the third is searched only if a lower bound of the
-// overlap along it (a tangent plane of the support function, below) is under the best so far.
+//     ellipse's support function, minimised by branch and bound over its arc with Newton on the
+//     last arcs (RimEdge, rim_piece).
+// The first two need no iteration; the pieces of the third are searched most promising first,
+// each only while a lower bound of the overlap on it (lower_bound) is under the best so far.
+// The depth is seed 004 §3.4's compression of the wheel–obstacle spring (Fig. 9).
 #include "ernest/dynamics/cylinder_box.hpp"
 
 #include <algorithm>
