@@ -137,9 +137,9 @@ struct SimOptions {
   /// depth-weighted centre of the deepest features (cpp/dynamics/cylinder_box.hpp). The chassis
   /// and bogie boxes always use ODE's box-box. Exact is faster (2 % a step among 20 rocks, 7 %
   /// among 100) but it is not the default: where a rock's edge meets a rim it pushes the wheel
-  /// sideways, and the 20-rock drive's last stall then ends 4-16 cm further on at dt, dt/2, dt/4,
-  /// dt/8 where Ode's stops at the same 1.342 m (benchmarks/RESULTS.md, "Session 12: wheel-rock
-  /// contact").
+  /// sideways, and where the 20-rock drive's last stall ends moves with the step (median over 10
+  /// start offsets 1.38 m at dt, 1.52 m at dt/8), where Ode's two outcomes do not
+  /// (benchmarks/RESULTS.md, "Session 12: wheel-rock contact").
   WheelObstacleContact wheel_obstacle_contact = WheelObstacleContact::Ode;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
