@@ -1,10 +1,9 @@
 // The exact wheel–rock contact (cpp/dynamics/cylinder_box.hpp) against closed forms (a wheel
 // level on a box top, against a vertical face, tilted onto its rim, a box edge under and across
 // the tread, a box corner into the cap near the rim), symmetry (mirroring the pose mirrors the
-// contact), continuity under small pose changes, disjoint poses, the depth as the minimum of the
-// overlap over the whole sphere (dense directions refined by local search: no direction beats the
-// normal), and against ODE's collider merged into one contact (merge_contact_points) over
-// thousands of random touching poses, the differences printed.
+// contact), continuity under small pose changes, disjoint poses, and the depth as the minimum of
+// the overlap over the whole sphere (dense directions refined by local search: no direction beats
+// the normal). Against ODE's collider: test_dynamics_cylinder_box_ode.cpp.
 #include <gtest/gtest.h>
 #include <ode/ode.h>
 
@@ -18,30 +17,14 @@
 
 #include <Eigen/Geometry>
 
+#include "cylinder_box_poses.hpp"
 #include "ernest/dynamics/cylinder_box.hpp"
 #include "ernest/dynamics/obstacle_contacts.hpp"
-#include "ernest/dynamics/ode_init.hpp"
-#include "ernest/dynamics/rover_parameters.hpp"
-#include "ernest/dynamics/rover_sim.hpp"
 
 using namespace ernest::dynamics;
-using detail::CylinderBoxContact;
-using Vec3 = Eigen::Vector3d;
-using Mat3 = Eigen::Matrix3d;
+using namespace cylinder_box_poses;
 
 namespace {
-
-const double kR = RoverParameters{}.wheel_radius, kHl = 0.5 * RoverParameters{}.wheel_width;
-const Vec3 kY = Vec3::UnitY();
-
-bool contact(const Vec3& c, const Vec3& u, const Vec3& b, const Mat3& rb, const Vec3& e,
-             CylinderBoxContact& out) {
-  return detail::cylinder_box_contact(c, u, kR, kHl, b, rb, e, out);
-}
-
-Mat3 rot(double angle, const Vec3& axis) {
-  return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
-}
 
 TEST(CylinderBox, WheelLevelOnBoxTop) {
   const Vec3 e(0.3, 0.3, 0.1);
@@ -130,36 +113,6 @@ TEST(CylinderBox, BoxCornerIntoCapNearRim) {
   EXPECT_NEAR((k.normal + Vec3::UnitZ()).norm(), 0.0, 1e-14);
   EXPECT_EQ(k.axis, detail::Cap);
   EXPECT_NEAR((k.pos - Vec3(v.x(), v.y(), kHl)).norm(), 0.0, 1e-12);
-}
-
-struct Pose {
-  Vec3 c, u, b, e;
-  Mat3 rb;
-};
-
-// Wheel-sized cylinders near rock-sized boxes in any orientation (benchmarks/profile_cylinder_box
-// draws the rover's: axle near horizontal).
-Pose random_pose(std::mt19937& rng, bool any_axis) {
-  std::uniform_real_distribution<double> uni(-1.0, 1.0), size(0.04, 0.2);
-  Pose p;
-  p.e = Vec3(size(rng), size(rng), size(rng));
-  p.b = Vec3(0.1 * uni(rng), 0.1 * uni(rng), 0.1 * uni(rng));
-  p.rb = Eigen::Quaterniond(Eigen::Vector4d(uni(rng), uni(rng), uni(rng), uni(rng)).normalized())
-             .toRotationMatrix();
-  if (any_axis) {
-    p.u = Vec3(uni(rng), uni(rng), uni(rng)).normalized();
-  } else {
-    p.rb = rot(3.14 * uni(rng), Vec3::UnitZ());
-    p.u = rot(0.2 * uni(rng), Vec3::UnitZ()) * rot(0.1 * uni(rng), Vec3::UnitX()) * kY;
-  }
-  p.c = p.b + Vec3(0.4 * uni(rng), 0.4 * uni(rng), 0.3 * uni(rng));
-  return p;
-}
-
-// The overlap of the pose along a world direction n.
-double overlap(const Pose& p, const Vec3& n) {
-  return detail::cylinder_box_overlap(p.rb.transpose() * n, p.rb.transpose() * (p.c - p.b),
-                                      p.rb.transpose() * p.u, kR, kHl, p.e);
 }
 
 // A local search on the sphere from n (16 directions turning by a golden angle each try; steps
@@ -320,122 +273,5 @@ TEST(CylinderBox, SeparatesAtTheDepth) {
   const Vec3 nan(std::nan(""), 0.0, 0.0);
   EXPECT_FALSE(contact(nan, kY, Vec3::Zero(), Mat3::Identity(), Vec3::Constant(0.1), k));
 }
-
-// ODE's cylinder-box merged into one contact (what near() does with Ode) against ours over the
-// rover's poses (axle near horizontal, yawed rocks; profile_cylinder_box's distribution) and
-// over any orientation. ODE's normal is one of its candidate axes, whose overlap is never below
-// our depth; the normals agree where ODE's axis is the exact one (all but its approximate
-// rim-edge axes and ties), and the points differ by ODE's choices (its cap as an 8-gon, the
-// generator regime by the same 0.9 threshold). The distributions are printed.
-void compare_with_ode(bool any_axis, int count) {
-  constexpr double kShallow = 0.02;  // [m]
-  detail::init_ode_once();
-  dGeomID cyl = dCreateCylinder(nullptr, kR, 2 * kHl), box = dCreateBox(nullptr, 1, 1, 1);
-  const auto set = [](dGeomID g, const Vec3& x, const Mat3& m) {
-    dMatrix3 o;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 4; ++j) o[4 * i + j] = j < 3 ? m(i, j) : 0.0;
-    dGeomSetPosition(g, x.x(), x.y(), x.z());
-    dGeomSetRotation(g, o);
-  };
-  std::mt19937 rng(any_axis ? 3 : 5);
-  std::vector<double> angle, ddepth, dpos;
-  int ours_only = 0, ode_only = 0, above = 0, differ_by_axis[5] = {};
-  while (static_cast<int>(angle.size()) < count) {
-    const Pose p = random_pose(rng, any_axis);
-    dGeomBoxSetLengths(box, 2 * p.e.x(), 2 * p.e.y(), 2 * p.e.z());
-    set(box, p.b, p.rb);
-    const Mat3 rc = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), p.u).toRotationMatrix();
-    set(cyl, p.c, rc);
-    dContactGeom pts[8];
-    const int n = dCollide(cyl, box, 8, pts, sizeof(dContactGeom));
-    CylinderBoxContact k;
-    const bool hit = contact(p.c, p.u, p.b, p.rb, p.e, k);
-    if (hit && k.depth > kShallow) continue;  // the rover's regime: mm, not a wheel inside a rock
-    if (n <= 0 || !hit) {
-      ours_only += hit && n <= 0;
-      ode_only += !hit && n > 0;
-      continue;
-    }
-    const dContactGeom m = detail::merge_contact_points(pts, n);
-    EXPECT_EQ(m.g1, cyl);
-    EXPECT_EQ(m.g2, box);
-    const Vec3 on(m.normal[0], m.normal[1], m.normal[2]), op(m.pos[0], m.pos[1], m.pos[2]);
-    // ODE's axis: an upper bound of the depth (up to ODE's rounding in its normalisation)
-    EXPECT_GE(overlap(p, on), k.depth - 1e-9);
-    above += overlap(p, on) > k.depth + 1e-9;
-    if (overlap(p, on) > k.depth + 1e-9) ++differ_by_axis[k.axis];
-    angle.push_back(std::acos(std::clamp(on.dot(k.normal), -1.0, 1.0)));
-    ddepth.push_back(m.depth - k.depth);
-    dpos.push_back((op - k.pos).norm());
-  }
-  const auto q = [](std::vector<double> v, double f) {
-    std::sort(v.begin(), v.end());
-    return v[static_cast<std::size_t>(f * (v.size() - 1))];
-  };
-  std::printf("%s, %d poses touching by < 2 cm (ours only %d, ODE only %d; ODE's axis deeper %d):\n",
-              any_axis ? "any orientation" : "rover poses", count, ours_only, ode_only, above);
-  std::printf("  normal angle [rad] median %.2e p90 %.2e p99 %.2e max %.2e\n", q(angle, 0.5),
-              q(angle, 0.9), q(angle, 0.99), q(angle, 1.0));
-  std::printf("  depth ODE - ours [m] p1 %.2e median %.2e p99 %.2e\n", q(ddepth, 0.01),
-              q(ddepth, 0.5), q(ddepth, 0.99));
-  std::printf("  point distance [m] median %.2e p90 %.2e p99 %.2e max %.2e\n", q(dpos, 0.5),
-              q(dpos, 0.9), q(dpos, 0.99), q(dpos, 1.0));
-  std::printf("  where ODE's axis is deeper, ours is: face %d cap %d cross %d vertex %d rim-edge %d\n",
-              differ_by_axis[0], differ_by_axis[1], differ_by_axis[2], differ_by_axis[3],
-              differ_by_axis[4]);
-  EXPECT_LT(q(angle, 0.5), 1e-6);  // the same axis (up to ODE's rounding) in most poses
-  dGeomDestroy(cyl);
-  dGeomDestroy(box);
-}
-
-// The exact contact as the dContactGeom near() records: the geom order, normal and sides of
-// merge_contact_points(dCollide(cylinder, box)).
-TEST(CylinderBox, ContactGeomHasOdesConventions) {
-  detail::init_ode_once();
-  dGeomID cyl = dCreateCylinder(nullptr, kR, 2 * kHl), box = dCreateBox(nullptr, 0.6, 0.6, 0.2);
-  const Mat3 rc = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), kY).toRotationMatrix();
-  dMatrix3 o;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 4; ++j) o[4 * i + j] = j < 3 ? rc(i, j) : 0.0;
-  const Vec3 c(0.05, 0.0, 0.1 + kR - 0.01);
-  dGeomSetPosition(cyl, c.x(), c.y(), c.z());
-  dGeomSetRotation(cyl, o);
-  dContactGeom pts[8];
-  const int n = dCollide(cyl, box, 8, pts, sizeof(dContactGeom));
-  ASSERT_GT(n, 0);
-  const dContactGeom ode = detail::merge_contact_points(pts, n);
-  CylinderBoxContact k;
-  ASSERT_TRUE(contact(c, kY, Vec3::Zero(), Mat3::Identity(), Vec3(0.3, 0.3, 0.1), k));
-  const dContactGeom ours = detail::to_contact_geom(k, cyl, box);
-  EXPECT_EQ(ours.g1, ode.g1);
-  EXPECT_EQ(ours.g2, ode.g2);
-  EXPECT_EQ(ours.side1, ode.side1);
-  EXPECT_EQ(ours.side2, ode.side2);
-  EXPECT_NEAR(ours.depth, ode.depth, 1e-12);
-  for (int i = 0; i < 3; ++i) {
-    EXPECT_NEAR(ours.normal[i], ode.normal[i], 1e-12);
-    EXPECT_NEAR(ours.pos[i], ode.pos[i], 1e-12);
-  }
-  dGeomDestroy(cyl);
-  dGeomDestroy(box);
-}
-
-TEST(CylinderBox, OptionIsValidated) {
-  SimOptions o;
-  EXPECT_EQ(o.wheel_obstacle_contact, WheelObstacleContact::Ode);
-  o.wheel_obstacle_contact = WheelObstacleContact::Exact;
-  o.validate();
-  o.wheel_obstacle_contact = static_cast<WheelObstacleContact>(7);
-  try {
-    o.validate();
-    FAIL() << "no exception";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("wheel_obstacle_contact = 7"), std::string::npos);
-  }
-}
-
-TEST(CylinderBox, AgainstOdeRoverPoses) { compare_with_ode(false, 3000); }
-TEST(CylinderBox, AgainstOdeAnyOrientation) { compare_with_ode(true, 3000); }
 
 }  // namespace
