@@ -21,7 +21,9 @@ one step, split into up to 8 substeps only after a step in which a wheel's slip 
 wheel surging up a rock face: obstacle_contacts.cpp); before session 9 every such step was 8
 substeps. The rock scenarios are timed with the default (what training runs) and with the old
 8 substeps, for comparison. Since session 11 the default steps the bodies with our own island
-step (SimOptions.stepper = Own); every scenario is also timed with ODE's dWorldStep (Ode).
+step (SimOptions.stepper = Own); every scenario is also timed with ODE's dWorldStep (Ode). Since
+session 12 the rock scenarios are also timed with the exact wheel–rock contact
+(SimOptions.wheel_obstacle_contact = Exact, cpp/dynamics/cylinder_box.hpp; not the default).
 
     pip install mujoco          (benchmark-only extra: pip install '.[bench]')
     ./run bench dynamics        (runs bench_dynamics.cpp, then this script)
@@ -120,9 +122,9 @@ def mjcf(p: D.RoverParameters, dt: float, boxes, wheel_shape: str = "sphere") ->
 </mujoco>"""
 
 
-def ours(boxes, substeps: int, stepper=None):
+def ours(boxes, substeps: int, stepper=None, contact=None):
     """Our rover on M90 with these rocks, rolling at SPEED after 50 steps: (sim, start snapshot)."""
-    sim = rolling_rover(boxes, SPEED, substeps, stepper=stepper)
+    sim = rolling_rover(boxes, SPEED, substeps, stepper=stepper, contact=contact)
     sim.step_n(50)
     return sim, sim.snapshot()
 
@@ -195,6 +197,9 @@ def main():
             sim, start = ours(boxes, sub)
             runs[(name, sub)] = (sim, start)
         runs[(name, "ode")] = ours(boxes, DEFAULT_SUBSTEPS, D.Stepper.Ode)
+        if n:
+            runs[(name, "exact")] = ours(boxes, DEFAULT_SUBSTEPS,
+                                         contact=D.WheelObstacleContact.Exact)
     for name, n in SCENARIOS.items():  # one contact per wheel on the ground and per wheel-rock pair
         ground, per_pair = runs[(name, "mujoco")].contacts(steps)
         if ground > 4 or per_pair > 1:
@@ -233,8 +238,9 @@ def main():
     print(f"| scenario | MuJoCo us/step, our wheel shape | ours us/step, default "
           f"({DEFAULT_SUBSTEPS} obstacle substep(s)) | ratio | MuJoCo us/step, sphere wheels | "
           f"ratio | ours us/step, {OTHER_SUBSTEPS} obstacle substep(s) | ratio | "
-          "ours us/step, ODE's dWorldStep | ratio | travelled ours / MuJoCo (our shape / spheres) [m] |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "ours us/step, ODE's dWorldStep | ratio | ours us/step, Exact wheel-rock contact | ratio | "
+          "travelled ours / MuJoCo (our shape / spheres) [m] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, n in SCENARIOS.items():
         on = f"{med[(name, DEFAULT_SUBSTEPS)]:.2f} | **{ratio(name, DEFAULT_SUBSTEPS):.2f}**"
         sph = (f"{med[(name, 'mujoco_sphere')]:.2f} | {ratio(name, DEFAULT_SUBSTEPS, 'mujoco_sphere'):.2f}"
@@ -242,9 +248,11 @@ def main():
         off = (f"{med[(name, OTHER_SUBSTEPS)]:.2f} | {ratio(name, OTHER_SUBSTEPS):.2f}" if n
                else "(no rocks: same) | —")
         ode = f"{med[(name, 'ode')]:.2f} | {ratio(name, 'ode'):.2f}"
+        exact = (f"{med[(name, 'exact')]:.2f} | {ratio(name, 'exact'):.2f}" if n
+                 else "(no rocks: same) | —")
         far = f"{travelled[(name, 'mujoco')]:.2f}" + (
             f" / {travelled[(name, 'mujoco_sphere')]:.2f}" if n else "")
-        print(f"| {name} | {med[(name, 'mujoco')]:.2f} | {on} | {sph} | {off} | {ode} | "
+        print(f"| {name} | {med[(name, 'mujoco')]:.2f} | {on} | {sph} | {off} | {ode} | {exact} | "
               f"{travelled[(name, DEFAULT_SUBSTEPS)]:.2f} / {far} |")
     print("ratio = ours / MuJoCo (our wheel shape unless marked), median of the per-repeat ratios "
           "(target <= 1.0)")

@@ -9,7 +9,7 @@ contacts always solved with their friction bounds (SimOptions.guess_obstacle_con
 ODE's pivoting solver, as before issue 17), on the same rocks; and the cost of an empty call
 from Python (step_n(0)), which every timed step includes.
 
-    python benchmarks/bench_rocks.py [--steps 2400]
+    python benchmarks/bench_rocks.py [--steps 2400] [--contact exact]
     python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt   # for profile_rocks.cpp
 """
 
@@ -41,8 +41,8 @@ def low_rocks(n: int, seed: int = 3) -> list:
     return out
 
 
-def run(rocks, steps: int, substeps: int, guess: bool):
-    sim = rolling_rover(rocks, SPEED, substeps, guess)
+def run(rocks, steps: int, substeps: int, guess: bool, contact=None):
+    sim = rolling_rover(rocks, SPEED, substeps, guess, contact=contact)
     sim.step_n(20)
     bins: dict[int, list[float]] = {}
     clock = time.perf_counter_ns
@@ -59,6 +59,8 @@ def main():
     ap.add_argument("--steps", type=int, default=2400, help="steps per run (30 s at 0.0125 s)")
     ap.add_argument("--substeps", type=int, nargs="+", default=sorted({D.SimOptions().obstacle_substeps, 8}, reverse=True),
                     help="SimOptions.obstacle_substeps values to time (default: 8 and the default)")
+    ap.add_argument("--contact", choices=("ode", "exact"),
+                    help="SimOptions.wheel_obstacle_contact (default: the option's default)")
     ap.add_argument("--dump-rocks", nargs=2, metavar=("N", "FILE"),
                     help="write bench_dynamics.py's N rocks (rock_field(N, seed=7, length=2, width=2, "
                          "x0=0.8)) to FILE, one 'cx cy cz sx sy sz yaw' a line, for "
@@ -86,8 +88,10 @@ def main():
     notes = []
     for name, rocks in fields.items():
         for substeps in args.substeps:
-            new, stats, x = run(rocks, args.steps, substeps, True)
-            old, _, x_old = run(rocks, args.steps, substeps, False)
+            contact = {None: None, "ode": D.WheelObstacleContact.Ode,
+                       "exact": D.WheelObstacleContact.Exact}[args.contact]
+            new, stats, x = run(rocks, args.steps, substeps, True, contact)
+            old, _, x_old = run(rocks, args.steps, substeps, False, contact)
             for k in sorted(set(new) | set(old)):
                 a = statistics.median(new[k]) if k in new else float("nan")
                 b = statistics.median(old[k]) if k in old else float("nan")

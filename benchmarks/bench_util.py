@@ -17,11 +17,11 @@ def median_us(fn, per, repeats=9):
 
 
 def rolling_rover(obstacles=(), speed=0.15, substeps=None, guess_obstacles=True, slip_warm_start=True,
-                  stepper=None):
+                  stepper=None, contact=None):
     """A rover on flat M90 (friction 0.8 on the rocks) with these box obstacles, started rolling at
     ``speed`` [m/s] with its wheels commanded to it (gimbal free): the driving runs of the
     dynamics benchmarks. ``substeps``: SimOptions.obstacle_substeps, ``stepper``:
-    SimOptions.stepper (None: their defaults)."""
+    SimOptions.stepper, ``contact``: SimOptions.wheel_obstacle_contact (None: their defaults)."""
     from ernest_cpp import dynamics as D
 
     o = D.make_options("soil", friction=0.8)
@@ -31,6 +31,8 @@ def rolling_rover(obstacles=(), speed=0.15, substeps=None, guess_obstacles=True,
     o.slip_warm_start = slip_warm_start
     if stepper is not None:
         o.stepper = stepper
+    if contact is not None:
+        o.wheel_obstacle_contact = contact
     sim = D.make_sim(obstacles=list(obstacles), options=o)
     sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, speed)
     c = D.Commands()

@@ -1,19 +1,25 @@
-// Driver for instruction counts of a wheel against a rock (issue 17 item 1, "Session 10:
-// collision" in RESULTS.md): ODE's dCollideCylinderBox, which the obstacle contacts use
-// (cpp/dynamics/obstacle_contacts.cpp), against FCL's cylinder-box (libccd's GJK/EPA and FCL's own
+// A wheel against a rock (issue 17 item 1, "Session 10: collision" and "Session 12: wheel-rock
+// contact" in RESULTS.md): ODE's dCollideCylinderBox merged into one contact (what near() in
+// cpp/dynamics/obstacle_contacts.cpp does with SimOptions::wheel_obstacle_contact = Ode), the
+// exact contact (cylinder_box.hpp, Exact), and FCL's cylinder-box (libccd's GJK/EPA and FCL's own
 // GJK solver) on the same 1000 touching poses: a wheel-sized cylinder (axle within 6 deg of
 // horizontal, yawed within 11 deg) near a yawed rock-sized box, kept where ODE finds a contact.
+// Prints the wall clock per call of ODE and Exact (medians of 31 alternated runs) and the ratio.
 // Each collider runs in its own non-inlined function so that callgrind gives its cost:
 //   valgrind --tool=callgrind --callgrind-out-file=/tmp/cb.out build/bench/benchmarks/profile_cylinder_box
 //   callgrind_annotate --inclusive=yes /tmp/cb.out | grep -E 'ode_calls|fcl_calls'
 #include <ode/ode.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <fcl/fcl.h>
 #include <random>
 #include <vector>
 
+#include "ernest/dynamics/cylinder_box.hpp"
+#include "ernest/dynamics/obstacle_contacts.hpp"
 #include "ernest/dynamics/ode_init.hpp"
 #include "ernest/dynamics/rover_parameters.hpp"
 
@@ -40,10 +46,30 @@ int ode_points(const Pose& p, dGeomID cyl, dGeomID box) {
   return dCollide(cyl, box, 4, pts, sizeof(dContactGeom));
 }
 
-__attribute__((noinline)) int ode_calls(const std::vector<Pose>& poses, dGeomID cyl, dGeomID box) {
-  int points = 0;
-  for (const Pose& p : poses) points += ode_points(p, cyl, box);
-  return points;
+__attribute__((noinline)) double ode_calls(const std::vector<Pose>& poses, dGeomID cyl,
+                                            dGeomID box) {
+  double sum = 0.0;
+  for (const Pose& p : poses) {
+    dContactGeom pts[4];
+    dGeomBoxSetLengths(box, 2 * p.half.x(), 2 * p.half.y(), 2 * p.half.z());
+    set(box, Eigen::Vector3d::Zero(), p.rock_rot);
+    set(cyl, p.wheel_centre, p.wheel_rot);
+    const int n = dCollide(cyl, box, 4, pts, sizeof(dContactGeom));
+    if (n > 0) sum += ernest::dynamics::detail::merge_contact_points(pts, n).depth;
+  }
+  return sum;
+}
+
+__attribute__((noinline)) double exact_calls(const std::vector<Pose>& poses, double r, double hl) {
+  double sum = 0.0;
+  for (const Pose& p : poses) {
+    ernest::dynamics::detail::CylinderBoxContact c;
+    if (ernest::dynamics::detail::cylinder_box_contact(p.wheel_centre, p.wheel_rot.col(2), r, hl,
+                                                       Eigen::Vector3d::Zero(), p.rock_rot,
+                                                       p.half, c))
+      sum += c.depth;
+  }
+  return sum;
 }
 
 __attribute__((noinline)) int fcl_calls(const std::vector<Pose>& poses, double r, double w,
@@ -86,11 +112,49 @@ int main() {
     p.wheel_centre = {0.4 * uni(rng), 0.4 * uni(rng), 0.3 * uni(rng)};
     if (ode_points(p, cyl, box) > 0) poses.push_back(p);
   }
-  const int ode = ode_calls(poses, cyl, box);
+  // The same poses moved apart along the exact normal to a depth in [0, 1 cm] (the rover's
+  // regime: mm), kept where ODE finds a contact too.
+  std::vector<Pose> shallow;
+  for (const Pose& p : poses) {
+    ernest::dynamics::detail::CylinderBoxContact c;
+    Pose s = p;
+    if (!ernest::dynamics::detail::cylinder_box_contact(p.wheel_centre, p.wheel_rot.col(2), r,
+                                                        0.5 * w, Eigen::Vector3d::Zero(),
+                                                        p.rock_rot, p.half, c))
+      continue;
+    s.wheel_centre += (c.depth - 0.005 * (1.0 + uni(rng))) * c.normal;
+    if (ode_points(s, cyl, box) > 0) shallow.push_back(s);
+  }
+  int ode = 0;
+  for (const Pose& p : poses) ode += ode_points(p, cyl, box);
   const int ccd = fcl_calls(poses, r, w, fcl::GST_LIBCCD);
   const int indep = fcl_calls(poses, r, w, fcl::GST_INDEP);
   std::printf("%zu touching poses: ODE %d points, FCL libccd %d contacts, FCL indep %d contacts\n",
               poses.size(), ode, ccd, indep);
+  // wall clock, alternated runs, medians [ns per call]
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  for (const auto* set_of : {&poses, &shallow}) {
+    std::vector<double> t_ode, t_exact;
+    double sink = 0.0;
+    using clock = std::chrono::steady_clock;
+    for (int rep = 0; rep < 31; ++rep) {
+      auto t0 = clock::now();
+      sink += ode_calls(*set_of, cyl, box);
+      auto t1 = clock::now();
+      sink += exact_calls(*set_of, r, 0.5 * w);
+      auto t2 = clock::now();
+      const double count = static_cast<double>(set_of->size());
+      t_ode.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / count);
+      t_exact.push_back(std::chrono::duration<double, std::nano>(t2 - t1).count() / count);
+    }
+    const double mo = median(t_ode), me = median(t_exact);
+    std::printf("%4zu %s poses, per call (median of 31): ODE + merge %.0f ns, Exact %.0f ns, "
+                "Exact / ODE %.2f (sum of depths %.3g)\n", set_of->size(),
+                set_of == &poses ? "touching" : "shallow ", mo, me, me / mo, sink);
+  }
   dSpaceDestroy(space);
   return 0;
 }

@@ -6,6 +6,8 @@
 // STEPS again, as bench_dynamics.py does: long enough for a time profile with
 //   perf record -e cpu-clock -F 20000 -g build/bench/benchmarks/profile_rocks /tmp/rocks20.txt 800 1 1 1 200
 // SKIP steps more of run-up profile a later stretch (e.g. 240: the first rock contact among 20).
+// CONTACT chooses SimOptions::wheel_obstacle_contact (exact|ode; default: the option's default),
+// DT_DIVISOR divides SimOptions::dt (and multiplies every step count: the same simulated time).
 // Prints the solver's counts.
 //   python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt
 //   valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*profiled_steps*' \
@@ -26,7 +28,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [SKIP] [stepper ode|own]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [SKIP] [stepper ode|own] [contact exact|ode] [DT_DIVISOR]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -41,21 +43,26 @@ int main(int argc, char** argv) {
   o.slip_warm_start = argc < 6 || std::atoi(argv[5]) != 0;
   // STEPPER: who steps the bodies (SimOptions::stepper; default: the option's default)
   if (argc >= 9) o.stepper = std::string(argv[8]) == "own" ? Stepper::Own : Stepper::Ode;
+  if (argc >= 10)
+    o.wheel_obstacle_contact = std::string(argv[9]) == "ode" ? WheelObstacleContact::Ode
+                                                             : WheelObstacleContact::Exact;
+  const int divisor = argc >= 11 ? std::max(1, std::atoi(argv[10])) : 1;
+  o.dt /= divisor;
   const double speed = 0.15;
   RoverSim sim(RoverParameters{}, HeightMap::flat(40, 20, 0.25, 0, -10, -10), rocks, o);
   sim.reset(0, 0, 0, 0, 0, speed);
   Commands c;
   for (auto& w : c.wheel_speed) w = speed / sim.parameters().wheel_radius;
   sim.set_commands(c);
-  sim.step_n(50 + (argc < 8 ? 0 : std::atoi(argv[7])));
+  sim.step_n(divisor * (50 + (argc < 8 ? 0 : std::atoi(argv[7]))));
   const Snapshot start = sim.snapshot();
   const int repeats = argc < 7 ? 1 : std::max(1, std::atoi(argv[6]));
   for (int r = 0; r < repeats; ++r) {
     if (r > 0) sim.restore(start);
-    profiled_steps(sim, std::atoi(argv[2]));
+    profiled_steps(sim, divisor * std::atoi(argv[2]));
   }
   const SolverStats& s = sim.solver_stats();
-  std::printf("%zu rocks: x %.3f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
+  std::printf("%zu rocks: x %.4f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
               "bounded %llu; slip solves %llu, driving %llu; guesses first %llu later %llu "
               "pivoted %llu; contacts explicit %llu implicit %llu; own steps %llu fallbacks %llu; plans made %llu grown %llu\n",
               rocks.size(), sim.state().position.x(), (unsigned long long)s.sparse_solves,

@@ -160,6 +160,12 @@ void bind_dynamics(py::module_& m) {
                      "(the same step to rounding, faster)")
       .value("Ode", Stepper::Ode)
       .value("Own", Stepper::Own);
+  py::enum_<WheelObstacleContact>(m, "WheelObstacleContact",
+                                  "How a wheel's contact with a rock is found: ODE's "
+                                  "cylinder-box collider merged into one contact, or the exact "
+                                  "penetration depth and normal (cylinder_box.hpp)")
+      .value("Ode", WheelObstacleContact::Ode)
+      .value("Exact", WheelObstacleContact::Exact);
   py::enum_<ActuatorMode>(m, "ActuatorMode", "Velocity servo, torque command, or unpowered.")
       .value("Velocity", ActuatorMode::Velocity)
       .value("Torque", ActuatorMode::Torque)
@@ -203,6 +209,11 @@ void bind_dynamics(py::module_& m) {
                      "Stepper.Ode: ODE's dWorldStep; Stepper.Own: our own island step "
                      "(cpp/dynamics/island_step.hpp), the same step to ~1e-10, falling back to "
                      "dWorldStep where it does not reproduce it")
+      .def_readwrite("wheel_obstacle_contact", &SimOptions::wheel_obstacle_contact,
+                     "WheelObstacleContact.Ode (default): ODE's dCollideCylinderBox, its points "
+                     "merged; WheelObstacleContact.Exact: a wheel's contact with a rock by the "
+                     "exact separating-axis theorem of a cylinder and a box (depth, normal; the "
+                     "point at the depth-weighted centre of the deepest features)")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,

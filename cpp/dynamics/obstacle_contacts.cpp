@@ -14,6 +14,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include "ernest/dynamics/cylinder_box.hpp"
 #include "ernest/dynamics/rover_sim_impl.hpp"
 
 namespace ernest::dynamics {
@@ -85,6 +86,21 @@ bool cylinder_box_disjoint(const Vec3& c, const Vec3& u, double r, double hl, co
   return std::abs(uq.dot(q)) > hl + e.dot(uq.cwiseAbs()) + kDisjointMargin;
 }
 
+// The exact contact (cylinder_box.hpp) as merge_contact_points(dCollide(cylinder, box)) gives
+// it: the cylinder first, normal from the box into it, sides -1 (ODE's cylinder-box sets no side).
+dContactGeom to_contact_geom(const CylinderBoxContact& c, dGeomID cylinder, dGeomID box) {
+  dContactGeom g{};
+  for (int i = 0; i < 3; ++i) {
+    g.pos[i] = c.pos[i];
+    g.normal[i] = c.normal[i];
+  }
+  g.depth = c.depth;
+  g.g1 = cylinder;
+  g.g2 = box;
+  g.side1 = g.side2 = -1;
+  return g;
+}
+
 }  // namespace detail
 
 // A lower bound of the effective mass [kg] a contact row (at x along n) on rover body b sees:
@@ -136,12 +152,17 @@ double RoverSim::Impl::contact_mass_bound(int b, const Vec3& x, const Vec3& n, b
   return 1.0 / s;
 }
 
-// One contact per rover-body–obstacle pair (merge_contact_points, obstacle_contacts.hpp), with
-// the §3.4 spring–damper and Coulomb friction mu; its ERP / CFM are set by set_obstacle_rows().
+// One contact per rover-body–obstacle pair from ODE's collider (merge_contact_points,
+// obstacle_contacts.hpp).
 void RoverSim::Impl::near(dGeomID a, dGeomID b) {
   dContactGeom points[kMaxContactsPerPair];
   const int n = dCollide(a, b, kMaxContactsPerPair, points, sizeof(dContactGeom));
-  if (n <= 0) return;
+  if (n > 0) add_obstacle_contact(a, b, merge_contact_points(points, n));
+}
+
+// A rover-body–obstacle pair's contact (merged: geoms and sides as its first point's), with the
+// §3.4 spring–damper and Coulomb friction mu; its ERP / CFM are set by set_obstacle_rows().
+void RoverSim::Impl::add_obstacle_contact(dGeomID a, dGeomID b, const dContactGeom& merged) {
   const dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
   int rover = -1;
   bool first = true;
@@ -158,7 +179,7 @@ void RoverSim::Impl::near(dGeomID a, dGeomID b) {
   const int k = n_obstacle_contacts++;
   dContact& c = obstacle_contact[k];
   c = dContact{};
-  c.geom = merge_contact_points(points, n);
+  c.geom = merged;
   // The force-dependent slip of the friction rows (SimOptions::rigid_slip), per contact.
   c.surface.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM | dContactSlip1 |
                    dContactSlip2;
@@ -271,6 +292,7 @@ void RoverSim::Impl::prepare_obstacles() {
     std::sort(near_x.begin(), near_x.begin() + n_near);
   }
   const int n_visit = all ? static_cast<int>(obstacle_geoms.size()) : n_near;
+  const bool exact = opt.wheel_obstacle_contact == WheelObstacleContact::Exact;
   for (int v = 0; v < n_visit; ++v) {
     const int i = all ? v : near_x[v];
     const std::array<double, 6>& ob = obstacle_aabb[i];
@@ -285,9 +307,17 @@ void RoverSim::Impl::prepare_obstacles() {
       if (j >= 2) {
         dVector3 lengths;
         dGeomBoxGetLengths(rock, lengths);
+        const Vec3 rock_centre = to_vec(dGeomGetPosition(rock)), half = 0.5 * to_vec(lengths);
+        const Mat3 rock_frame = to_mat(dGeomGetRotation(rock));
+        if (exact) {  // the exact contact decides disjointness itself
+          CylinderBoxContact cb;
+          if (cylinder_box_contact(centre[j], frame[j].col(2), wheel_radius, wheel_half_width,
+                                   rock_centre, rock_frame, half, cb))
+            add_obstacle_contact(geom[j], rock, to_contact_geom(cb, geom[j], rock));
+          continue;
+        }
         if (cylinder_box_disjoint(centre[j], frame[j].col(2), wheel_radius, wheel_half_width,
-                                  to_vec(dGeomGetPosition(rock)), to_mat(dGeomGetRotation(rock)),
-                                  0.5 * to_vec(lengths)))
+                                  rock_centre, rock_frame, half))
           continue;
       }
       near(geom[j], rock);

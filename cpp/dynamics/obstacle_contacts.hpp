@@ -8,6 +8,8 @@
 
 #include <Eigen/Core>
 
+#include "ernest/dynamics/cylinder_box.hpp"
+
 namespace ernest::dynamics::detail {
 
 /// One contact per rover-body–obstacle pair from the n points ODE's collider returns (4-6 for a
@@ -53,5 +55,10 @@ constexpr double kDisjointMargin = 1e-9;  // [m]
 bool cylinder_box_disjoint(const Eigen::Vector3d& c, const Eigen::Vector3d& u, double r, double hl,
                            const Eigen::Vector3d& b, const Eigen::Matrix3d& rb,
                            const Eigen::Vector3d& e);
+
+/// The exact contact of a wheel (cylinder) and a rock (box) as the dContactGeom that
+/// merge_contact_points(dCollide(cylinder, box, ...)) gives: g1 the cylinder, normal from the box
+/// into it, sides -1 (SimOptions::wheel_obstacle_contact = Exact).
+dContactGeom to_contact_geom(const CylinderBoxContact& c, dGeomID cylinder, dGeomID box);
 
 }  // namespace ernest::dynamics::detail

@@ -153,6 +153,11 @@ void SimOptions::validate() const {
   require(stepper == Stepper::Ode || stepper == Stepper::Own,
           "SimOptions.stepper = " + std::to_string(static_cast<int>(stepper)) +
               " must be Stepper.Ode (0) or Stepper.Own (1)");
+  require(wheel_obstacle_contact == WheelObstacleContact::Ode ||
+              wheel_obstacle_contact == WheelObstacleContact::Exact,
+          "SimOptions.wheel_obstacle_contact = " +
+              std::to_string(static_cast<int>(wheel_obstacle_contact)) +
+              " must be WheelObstacleContact.Ode (0) or WheelObstacleContact.Exact (1)");
 }
 
 void Commands::validate() const {

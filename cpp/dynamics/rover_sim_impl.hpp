@@ -297,6 +297,7 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
   bool touching_obstacles();
   void prepare_obstacles();
   void near(dGeomID a, dGeomID b);
+  void add_obstacle_contact(dGeomID a, dGeomID b, const dContactGeom& merged);
   double contact_mass_bound(int body, const Vec3& point, const Vec3& normal, bool hinged) const;
   void set_obstacle_rows();
   void save_bodies();

@@ -102,6 +102,10 @@ class Stepper(Enum):
     Ode = 0
     Own = 1
 
+class WheelObstacleContact(Enum):
+    Ode = 0
+    Exact = 1
+
 class ActuatorMode(Enum):
     Velocity = 0
     Torque = 1
@@ -129,6 +133,7 @@ class SimOptions:
     guess_obstacle_contacts: bool
     sparse_lcp: bool
     stepper: Stepper
+    wheel_obstacle_contact: WheelObstacleContact
     max_speed: float
     max_angular_speed: float
     slip_force_tolerance: float

@@ -83,13 +83,20 @@ std::vector<BoxObstacle> rocks() {
   return boxes;
 }
 
-SimOptions with(Stepper stepper) {
+// A pinned configuration: who steps the bodies and how a wheel's contact with a rock is found.
+struct Config {
+  Stepper stepper;
+  WheelObstacleContact contact;
+};
+
+SimOptions with(Config c) {
   SimOptions o;
-  o.stepper = stepper;
+  o.stepper = c.stepper;
+  o.wheel_obstacle_contact = c.contact;
   return o;
 }
 
-std::uint64_t flat_m90(Stepper stepper) {
+std::uint64_t flat_m90(Config stepper) {
   RoverSim sim(RoverParameters{}, HeightMap::flat(12, 10, 0.25), {}, with(stepper));
   sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.1);
   Hash h;
@@ -97,7 +104,7 @@ std::uint64_t flat_m90(Stepper stepper) {
   return h.h;
 }
 
-std::uint64_t rock_field(Stepper stepper, int& touching) {
+std::uint64_t rock_field(Config stepper, int& touching) {
   SimOptions o = with(stepper);
   o.seed = 5;  // the friction draw
   RoverSim sim(RoverParameters{}, HeightMap::flat(12, 10, 0.25), rocks(), o);
@@ -107,7 +114,7 @@ std::uint64_t rock_field(Stepper stepper, int& touching) {
   return h.h;
 }
 
-std::uint64_t slope(Stepper stepper) {  // 12 deg of M90 uphill, and rigid ground on 10 deg
+std::uint64_t slope(Config stepper) {  // 12 deg of M90 uphill, and rigid ground on 10 deg
   Hash h;
   RoverSim soil(RoverParameters{}, HeightMap::slope(12.0 * M_PI / 180.0, 30, 10, 0.25, -15, -5),
                 {}, with(stepper));
@@ -123,7 +130,7 @@ std::uint64_t slope(Stepper stepper) {  // 12 deg of M90 uphill, and rigid groun
   return h.h;
 }
 
-std::uint64_t batch(Stepper who) {  // three rovers on two threads, four steps per call
+std::uint64_t batch(Config who) {  // three rovers on two threads, four steps per call
   std::vector<std::shared_ptr<RoverSim>> sims;
   for (int i = 0; i < 3; ++i) {
     SimOptions o = with(who);
@@ -152,7 +159,7 @@ std::uint64_t batch(Stepper who) {  // three rovers on two threads, four steps p
 }
 
 // 150 steps, a snapshot, 150 more; restored, the same 150 again: the restored run repeats them.
-std::uint64_t snapshot_restore(Stepper stepper) {
+std::uint64_t snapshot_restore(Config stepper) {
   SimOptions o = with(stepper);
   o.seed = 9;
   RoverSim sim(RoverParameters{}, HeightMap::flat(12, 10, 0.25), rocks(), o);
@@ -202,6 +209,13 @@ std::uint64_t snapshot_restore(Stepper stepper) {
 // pair by joint pair: the same step to rounding (test_dynamics_island_step: ~1e-15 m per step from
 // the same state), other last bits, so all five were pinned for Own (kPinnedOwn). The Ode path
 // (dWorldStep) keeps the session-10 pins (kPinnedOde), unchanged: nothing on it moved.
+// Session 12: SimOptions::wheel_obstacle_contact (the default, Ode: ODE's cylinder-box merged, as
+// before) gained Exact (a wheel's contact with a rock by the exact separating-axis theorem,
+// cpp/dynamics/cylinder_box.hpp: another depth, normal and point where ODE's axis is not the exact
+// one, e.g. a box edge against a rim, other last bits where it is), which moves rock_field, batch
+// and snapshot_restore; flat_m90 and slope have no rocks and keep their pins. kPinnedOwn and
+// kPinnedOde (the default contact) did not move; kPinnedOwnExact and kPinnedOdeExact pin Exact on
+// both steppers.
 struct Pinned {
   std::uint64_t flat_m90, rock_field, slope, batch, snapshot_restore;
 };
@@ -209,6 +223,12 @@ constexpr Pinned kPinnedOde{0x6e9b20ecdb9723ddull, 0xd9c34ab7c133969eull, 0x2deb
                             0xdc06c50cfd86400bull, 0x6da0a47deb573da4ull};
 constexpr Pinned kPinnedOwn{0x99302755834fb1ffull, 0x90e13077536399faull, 0xe8dce32c749cf013ull,
                             0x93dfc69f6efc7079ull, 0x556e38d413ba4ce1ull};
+constexpr Pinned kPinnedOdeExact{0x6e9b20ecdb9723ddull, 0xd5724314c1f8f10cull,
+                                 0x2deb6a8f8f8e4976ull, 0x359059f3c9085b85ull,
+                                 0x92ddabd05def0a3aull};
+constexpr Pinned kPinnedOwnExact{0x99302755834fb1ffull, 0x81ac3d889230522bull,
+                                 0xe8dce32c749cf013ull, 0x3fad004e74165e74ull,
+                                 0x0b171c5885a72104ull};
 
 void expect_pinned(const char* name, std::uint64_t got, std::uint64_t pinned) {
   EXPECT_EQ(got, pinned) << name << ": the trajectory's bits changed; if the change is meant "
@@ -218,16 +238,28 @@ void expect_pinned(const char* name, std::uint64_t got, std::uint64_t pinned) {
 
 }  // namespace
 
-// Each pinned scenario on both steppers: the default (Own) and ODE's dWorldStep.
-class TrajectoryHash : public ::testing::TestWithParam<Stepper> {
+// Each pinned scenario on both steppers, the default (Own) and ODE's dWorldStep, and with both
+// wheel–rock contacts, the default (ODE's collider) and Exact.
+class TrajectoryHash : public ::testing::TestWithParam<Config> {
  protected:
-  const Pinned& pinned() const { return GetParam() == Stepper::Own ? kPinnedOwn : kPinnedOde; }
+  const Pinned& pinned() const {
+    const bool own = GetParam().stepper == Stepper::Own;
+    if (GetParam().contact == WheelObstacleContact::Exact)
+      return own ? kPinnedOwnExact : kPinnedOdeExact;
+    return own ? kPinnedOwn : kPinnedOde;
+  }
 };
 
-INSTANTIATE_TEST_SUITE_P(Steppers, TrajectoryHash, ::testing::Values(Stepper::Own, Stepper::Ode),
-                         [](const ::testing::TestParamInfo<Stepper>& i) {
-                           return std::string(i.param == Stepper::Own ? "Own" : "Ode");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Steppers, TrajectoryHash,
+    ::testing::Values(Config{Stepper::Own, WheelObstacleContact::Exact},
+                      Config{Stepper::Ode, WheelObstacleContact::Exact},
+                      Config{Stepper::Own, WheelObstacleContact::Ode},
+                      Config{Stepper::Ode, WheelObstacleContact::Ode}),
+    [](const ::testing::TestParamInfo<Config>& i) {
+      return std::string(i.param.stepper == Stepper::Own ? "Own" : "Ode") +
+             (i.param.contact == WheelObstacleContact::Exact ? "Exact" : "OdeContact");
+    });
 
 TEST_P(TrajectoryHash, FlatM90) {
   expect_pinned("flat_m90", flat_m90(GetParam()), pinned().flat_m90);
