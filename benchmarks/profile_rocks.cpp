@@ -26,7 +26,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [SKIP] [stepper ode|own]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [SKIP] [stepper ode|own] [resolve_rhs_only 0|1]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   o.slip_warm_start = argc < 6 || std::atoi(argv[5]) != 0;
   // STEPPER: who steps the bodies (SimOptions::stepper; default: the option's default)
   if (argc >= 9) o.stepper = std::string(argv[8]) == "own" ? Stepper::Own : Stepper::Ode;
+  if (argc >= 10) o.resolve_rhs_only = std::atoi(argv[9]) != 0;
   const double speed = 0.15;
   RoverSim sim(RoverParameters{}, HeightMap::flat(40, 20, 0.25, 0, -10, -10), rocks, o);
   sim.reset(0, 0, 0, 0, 0, speed);
@@ -57,14 +58,15 @@ int main(int argc, char** argv) {
   const SolverStats& s = sim.solver_stats();
   std::printf("%zu rocks: x %.3f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
               "bounded %llu; slip solves %llu, driving %llu; guesses first %llu later %llu "
-              "pivoted %llu; contacts explicit %llu implicit %llu; own steps %llu fallbacks %llu; plans made %llu grown %llu\n",
+              "pivoted %llu; contacts explicit %llu implicit %llu; own steps %llu fallbacks %llu rhs %llu; plans made %llu grown %llu; state x %.17g z %.17g vx %.17g\n",
               rocks.size(), sim.state().position.x(), (unsigned long long)s.sparse_solves,
               (unsigned long long)s.dense_solves, (unsigned long long)s.obstacle_guessed,
               (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves,
               (unsigned long long)s.slip_driving, (unsigned long long)s.first_guess,
               (unsigned long long)s.later_guess, (unsigned long long)s.pivoted,
               (unsigned long long)s.obstacle_explicit, (unsigned long long)s.obstacle_implicit,
-              (unsigned long long)s.own_steps, (unsigned long long)s.own_fallbacks,
-              (unsigned long long)s.plans_made, (unsigned long long)s.plans_grown);
+              (unsigned long long)s.own_steps, (unsigned long long)s.own_fallbacks, (unsigned long long)s.rhs_resolves,
+              (unsigned long long)s.plans_made, (unsigned long long)s.plans_grown, sim.state().position.x(),
+              sim.state().position.z(), sim.state().linear_velocity.x());
   return 0;
 }

@@ -203,6 +203,10 @@ void bind_dynamics(py::module_& m) {
                      "Stepper.Ode: ODE's dWorldStep; Stepper.Own: our own island step "
                      "(cpp/dynamics/island_step.hpp), the same step to ~1e-10, falling back to "
                      "dWorldStep where it does not reproduce it")
+      .def_readwrite("resolve_rhs_only", &SimOptions::resolve_rhs_only,
+                     "Own stepper: a re-solve whose rows are the last attempt's (the implicit "
+                     "slip's level-only solves) keeps its rows, A and LDL^T factor and solves a "
+                     "new right-hand side (the same bits); False rebuilds every attempt")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,
@@ -309,6 +313,9 @@ void bind_dynamics(py::module_& m) {
                     "attempts stepped by our own island step (SimOptions.stepper = Own)")
       .def_readonly("own_fallbacks", &SolverStats::own_fallbacks,
                     "attempts our own island step handed to ODE's dWorldStep")
+      .def_readonly("rhs_resolves", &SolverStats::rhs_resolves,
+                    "own steps solved as a new right-hand side of the last attempt's rows and "
+                    "factor (SimOptions.resolve_rhs_only)")
       .def_readonly("plans_made", &SolverStats::plans_made,
                     "sparse solves' symbolic analyses for row sets not remembered")
       .def_readonly("plans_grown", &SolverStats::plans_grown,
@@ -333,7 +340,8 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.obstacle_explicit) + ", obstacle_implicit=" +
                std::to_string(s.obstacle_implicit) + ", own_steps=" +
                std::to_string(s.own_steps) + ", own_fallbacks=" +
-               std::to_string(s.own_fallbacks) + ", plans_made=" +
+               std::to_string(s.own_fallbacks) + ", rhs_resolves=" +
+               std::to_string(s.rhs_resolves) + ", plans_made=" +
                std::to_string(s.plans_made) + ", plans_grown=" +
                std::to_string(s.plans_grown) + ", fast_lcp=" +
                (s.fast_lcp ? "True" : "False") + ")";

@@ -7,25 +7,47 @@
 // integration (ode/src/util.cpp), written back with ODE's setters.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "ernest/dynamics/island_step.hpp"
 
 namespace ernest::dynamics::detail {
 
-IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws) {
-  if (!ws.enabled || n_attempt_ > kMaxAttemptJoints || !(h > 0.0)) return Outcome::Unsupported;
-  // Only our joints may act on our bodies (each permanent joint joins two of them), and the
-  // bodies must be plain dynamic ones: dxStepBody's options (finite rotation, speed cap,
-  // damping) and disabled or kinematic bodies are not reproduced.
+// Only our joints may act on our bodies (each permanent joint joins two of them), and the
+// bodies must be plain dynamic ones: dxStepBody's options (finite rotation, speed cap, damping)
+// and disabled or kinematic bodies are not reproduced.
+bool IslandStep::bodies_supported() const {
   int attached = 0;
   for (dBodyID b : body_) {
     if (!dBodyIsEnabled(b) || dBodyIsKinematic(b) || dBodyGetFiniteRotationMode(b) != 0 ||
         dBodyGetMaxAngularSpeed(b) != dInfinity || dBodyGetLinearDamping(b) != 0.0 ||
         dBodyGetAngularDamping(b) != 0.0)
-      return Outcome::Unsupported;
+      return false;
     attached += dBodyGetNumJoints(b);
   }
-  if (attached != 2 * n_permanent_) return Outcome::Unsupported;
+  return attached == 2 * n_permanent_;
+}
+
+// Stage 0's accumulators: the force plus gravity, the torque plus the gyroscopic torque (gyro_,
+// computed by step() from the body's state).
+void IslandStep::load_forces(int i, const dVector3 gravity) {
+  BodyState& s = bs_[i];
+  const dBodyID b = body_[i];
+  const dReal* f = dBodyGetForce(b);
+  const dReal* t = dBodyGetTorque(b);
+  for (int c = 0; c < 3; ++c) {
+    s.facc_g[c] = f[c];
+    s.tacc_g[c] = t[c];
+    if (gravity[c] != 0.0 && dBodyGetGravityMode(b)) s.facc_g[c] += mass_[i] * gravity[c];
+  }
+  if (has_gyro_[i])
+    for (int c = 0; c < 3; ++c) s.tacc_g[c] += gyro_[i][c];
+}
+
+IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws) {
+  kept_ = false;
+  if (!ws.enabled || n_attempt_ > kMaxAttemptJoints || !(h > 0.0)) return Outcome::Unsupported;
+  if (!bodies_supported()) return Outcome::Unsupported;
   const double fps = 1.0 / h;  // ODE's dRecip(stepsize)
   const double erp = dWorldGetERP(world);
   world_cfm_ = dWorldGetCFM(world);
@@ -43,17 +65,17 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
     s.q = dBodyGetQuaternion(b);
     s.lvel = dBodyGetLinearVel(b);
     s.avel = dBodyGetAngularVel(b);
-    const dReal* f = dBodyGetForce(b);
-    const dReal* t = dBodyGetTorque(b);
     s.inv_mass = 1.0 / mass_[i];
-    for (int c = 0; c < 3; ++c) {
-      s.facc_g[c] = f[c];
-      s.tacc_g[c] = t[c];
-      if (gravity[c] != 0.0 && dBodyGetGravityMode(b)) s.facc_g[c] += mass_[i] * gravity[c];
-    }
+    double* kept = kept_state_[i].data();  // (resolve() compares the state it starts from)
+    std::copy(s.pos, s.pos + 3, kept);
+    std::copy(s.q, s.q + 4, kept + 3);
+    std::copy(s.R, s.R + 12, kept + 7);
+    std::copy(s.lvel, s.lvel + 3, kept + 19);
+    std::copy(s.avel, s.avel + 3, kept + 22);
     dMatrix3 tmp;
     dMultiply2_333(tmp, inv_inertia_body_[i].data(), s.R);
     dMultiply0_333(s.invI, s.R, tmp);
+    has_gyro_[i] = false;
     if (dBodyGetGyroscopicMode(b)) {
       // Lacoursière's implicit gyroscopic torque, as stage 0: with I and L = I w in the world
       // frame, tau = (I (I - h [L]x)⁻¹ - 1) L / h
@@ -72,9 +94,11 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
         itild[10] -= 1;
         dVector3 tau0;
         dMultiply0_331(tau0, itild, L);
-        for (int c = 0; c < 3; ++c) s.tacc_g[c] += tau0[c];
+        for (int c = 0; c < 3; ++c) gyro_[i][c] = tau0[c];
+        has_gyro_[i] = true;
       }
     }
+    load_forces(i, gravity);
   }
 
   // ---- stage 2a: the rows, joints ordered as ODE's (purely unbounded joints first: nub rows)
@@ -92,19 +116,39 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
       order_[n_order_++] = &jt;
     }
   }
+  n_permanent_order_ = n_order_;
   for (int k = 0; k < n_attempt_; ++k) {
-    if (!add_rows(attempt_[k], fps, erp)) return Outcome::Unsupported;
-    order_[n_order_++] = &attempt_[k];
+    if (!add_rows(attempts_[cur_][k], fps, erp)) return Outcome::Unsupported;
+    order_[n_order_++] = &attempts_[cur_][k];
   }
   const int m = m_;
   for (int r = 0; r < m; ++r) {
     // friction bounds tied to a normal force: only the sparse path's Coulomb guesses solve them
     if (findex_[r] >= 0 && !ws.coulomb_friction) return Outcome::Unsupported;
+    c_[r] = bx_[2 * r];
     bx_[2 * r] *= fps;
     cfm_[r] *= fps;
   }
 
   // ---- stage 2b/2c: rhs = c / h - J (v / h + M⁻¹ f), and A
+  form_rhs(m, fps, true);
+  build_a(m, h);
+  kept_nub_ = nub;
+  if (!solve(ws, 0)) return Outcome::SolveRefused;
+  apply(h);
+  // What resolve() needs to tell the same problem and to solve it again.
+  kept_ = true;
+  kept_buf_ = cur_;
+  kept_n_attempt_ = n_attempt_;
+  kept_factor_ = ws.factors;
+  kept_h_ = h;
+  kept_erp_ = erp;
+  for (int c = 0; c < 3; ++c) kept_gravity_[c] = gravity[c];
+  return Outcome::Stepped;
+}
+
+// Stage 2b (and M⁻¹ Jᵀ of each row's sides with with_jm): bx -= J (v / h + M⁻¹ f) per side.
+void IslandStep::form_rhs(int m, double fps, bool with_jm) {
   std::array<std::array<double, 6>, kBodies> tmp1;
   for (int i = 0; i < kBodies; ++i) {
     const BodyState& s = bs_[i];
@@ -121,23 +165,27 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
       double sum = J[0] * tmp1[bi][0];
       for (int c = 1; c < 6; ++c) sum += J[c] * tmp1[bi][c];
       bx_[2 * r] -= sum;
+      if (!with_jm) continue;
       // M⁻¹ Jᵀ of this side: J_lin / m, invI J_ang (invI symmetric)
       double* JM = &jm_[r][6 * side];
       for (int c = 0; c < 3; ++c) JM[c] = J[c] * bs_[bi].inv_mass;
       dMultiply0_133(JM + 3, J + 3, bs_[bi].invI);
     }
   }
-  build_a(m, h);
+}
 
-  // ---- stage 3: the solve
-  if (m > 0) {
-    if (!solve_sparse(ws, static_cast<unsigned>(m), a_.data(), bx_.data(), nullptr,
-                      static_cast<unsigned>(nub), lh_.data(), findex_.data()))
-      return Outcome::SolveRefused;
-    ++ws.sparse;
-  }
+// Stage 3: the solve (kept_factor: resolve()'s, see solve_sparse).
+bool IslandStep::solve(LcpWorkspace& ws, std::uint64_t kept_factor) {
+  if (m_ == 0) return true;
+  if (!solve_sparse(ws, static_cast<unsigned>(m_), a_.data(), bx_.data(), nullptr,
+                    static_cast<unsigned>(kept_nub_), lh_.data(), findex_.data(), kept_factor))
+    return false;
+  ++ws.sparse;
+  return true;
+}
 
-  // ---- stage 4: constraint forces, feedback, velocities and poses
+// Stage 4: constraint forces, feedback, velocities and poses.
+void IslandStep::apply(double h) {
   for (auto& f : cforce_) f.fill(0.0);
   for (int k = 0; k < n_order_; ++k) {
     const Joint& jt = *order_[k];
@@ -162,7 +210,99 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
     }
   }
   integrate(h);
-  return Outcome::Stepped;
+}
+
+namespace {
+
+bool same_bits(const double* x, const double* y, int n) {
+  return std::memcmp(x, y, sizeof(double) * static_cast<std::size_t>(n)) == 0;
+}
+
+}  // namespace
+
+// resolve()'s checks (island_step.hpp): everything step() reads but the attempt's targets and
+// the forces on the bodies is as the kept step read it.
+bool IslandStep::same_problem(dWorldID world, double h, const LcpWorkspace& ws) {
+  if (!kept_ || kept_buf_ == cur_ || !ws.enabled || n_attempt_ != kept_n_attempt_) return false;
+  if (m_ > 0 && ws.factors != kept_factor_) return false;  // another solve factorised since
+  dVector3 g;
+  dWorldGetGravity(world, g);
+  const double world_now[8] = {h, dWorldGetERP(world), dWorldGetCFM(world),
+                               dWorldGetContactSurfaceLayer(world),
+                               dWorldGetContactMaxCorrectingVel(world), g[0], g[1], g[2]};
+  const double world_kept[8] = {kept_h_, kept_erp_, world_cfm_, min_depth_, max_vel_,
+                                kept_gravity_[0], kept_gravity_[1], kept_gravity_[2]};
+  if (!same_bits(world_now, world_kept, 8) || !bodies_supported()) return false;
+  for (int i = 0; i < kBodies; ++i) {
+    const dBodyID b = body_[i];
+    const double* kept = kept_state_[i].data();
+    if (!same_bits(dBodyGetPosition(b), kept, 3) || !same_bits(dBodyGetQuaternion(b), kept + 3, 4) ||
+        !same_bits(dBodyGetRotation(b), kept + 7, 12) ||
+        !same_bits(dBodyGetLinearVel(b), kept + 19, 3) ||
+        !same_bits(dBodyGetAngularVel(b), kept + 22, 3))
+      return false;
+  }
+  const Joint* before = attempts_[kept_buf_].data();
+  const Joint* now = attempts_[cur_].data();
+  for (int k = 0; k < n_attempt_; ++k) {
+    const Joint &x = now[k], &y = before[k];
+    if (x.kind != y.kind || x.a != y.a || x.b != y.b || x.fb != y.fb) return false;
+    if (x.kind == Kind::LMotor) {
+      const double u[5] = {x.lm_axis[0], x.lm_axis[1], x.lm_axis[2], x.lm_fmax, x.lm_cfm};
+      const double v[5] = {y.lm_axis[0], y.lm_axis[1], y.lm_axis[2], y.lm_fmax, y.lm_cfm};
+      if (!same_bits(u, v, 5)) return false;
+      continue;
+    }
+    const dContact &p = x.contact, &q = y.contact;
+    if (p.surface.mode != q.surface.mode) return false;
+    const auto fields = [](const dContact& c, double* f) {  // all but the motions (targets)
+      const dSurfaceParameters& s = c.surface;
+      const double v[21] = {s.mu, s.mu2, s.rho, s.rho2, s.rhoN, s.bounce, s.bounce_vel,
+                            s.soft_erp, s.soft_cfm, s.slip1, s.slip2, c.geom.depth,
+                            c.geom.pos[0], c.geom.pos[1], c.geom.pos[2], c.geom.normal[0],
+                            c.geom.normal[1], c.geom.normal[2], c.fdir1[0], c.fdir1[1], c.fdir1[2]};
+      std::copy(v, v + 21, f);
+    };
+    double u[21], v[21];
+    fields(p, u);
+    fields(q, v);
+    if (!same_bits(u, v, 21)) return false;
+  }
+  return true;
+}
+
+// The kept step's problem again with the new targets and forces: stage 0's accumulators, the
+// rows' right-hand sides (the kept c / h but for the attempt's targets), stage 2b without
+// M⁻¹ Jᵀ, the solve with the kept factor, stage 4. Each value is computed as step() computes it,
+// from the same inputs: the same bits.
+IslandStep::Outcome IslandStep::resolve(dWorldID world, double h, LcpWorkspace& ws) {
+  if (!same_problem(world, h, ws)) return step(world, h, ws);
+  const double fps = 1.0 / h;
+  const dVector3 gravity = {kept_gravity_[0], kept_gravity_[1], kept_gravity_[2], 0.0};
+  for (int i = 0; i < kBodies; ++i) load_forces(i, gravity);
+  for (int r = 0; r < m_; ++r) bx_[2 * r] = c_[r];
+  const Joint* before = attempts_[kept_buf_].data();
+  for (int k = 0; k < n_attempt_; ++k) {
+    Joint& jt = attempts_[cur_][k];
+    const Joint& y = before[k];
+    jt.first = y.first;
+    jt.rows = y.rows;
+    jt.row_a = y.row_a;
+    jt.row_b = y.row_b;
+    order_[n_permanent_order_ + k] = &jt;
+    double c[3];
+    const int n = std::min(attempt_targets(jt, fps, kept_erp_, c), jt.rows);
+    for (int q = 0; q < n; ++q) bx_[2 * (jt.first + q)] = c_[jt.first + q] = c[q];
+  }
+  for (int r = 0; r < m_; ++r) bx_[2 * r] *= fps;
+  form_rhs(m_, fps, false);
+  kept_ = false;
+  if (!solve(ws, kept_factor_)) return Outcome::SolveRefused;
+  apply(h);
+  kept_ = true;
+  kept_buf_ = cur_;
+  kept_factor_ = ws.factors;  // (a guess flipped in the solve factorised the same A again)
+  return Outcome::Resolved;
 }
 
 // A's lower triangle (row stride dPAD(m), ODE's layout for the solver), body by body: the rows

@@ -43,8 +43,13 @@ class IslandStep {
   void add_universal(dJointID j);
   void add_amotor(dJointID j);
 
-  /// This attempt's own joints: recorded here instead of created in ODE (clear: none).
-  void clear_attempt() { n_attempt_ = 0; }
+  /// This attempt's own joints: recorded here instead of created in ODE (clear: none). Two
+  /// buffers in turn: the last stepped attempt's joints stay for resolve() to compare.
+  void clear_attempt() {
+    if (cur_ != kept_buf_) kept_ = false;  // a second attempt recorded since the kept one
+    cur_ ^= 1;
+    n_attempt_ = 0;
+  }
   /// A contact as dJointCreateContact + dJointAttach(b1, b2) + dJointSetFeedback(fb) would make.
   void add_contact(const dContact& c, dBodyID b1, dBodyID b2, dJointFeedback* fb);
   /// A one-axis linear motor (axis global, rel 0) on body b alone, as dJointCreateLMotor with
@@ -56,8 +61,21 @@ class IslandStep {
   /// One step of length h of the island. Anything but Stepped: nothing in ODE changed, and
   /// dWorldStep must take the step (after materialise()); SolveRefused: solve_sparse was tried
   /// on this very problem and refused it (ODE's Dantzig solver must solve it).
-  enum class Outcome { Stepped, Unsupported, SolveRefused };
+  /// Resolved: resolve() took the last step's rows and factor.
+  enum class Outcome { Stepped, Resolved, Unsupported, SolveRefused };
   Outcome step(dWorldID world, double h, LcpWorkspace& ws);
+  /// Another attempt at the last step()'s problem, which differs from it only in the attempt's
+  /// targets (contacts' motion velocities, linear motors' speeds) and the forces on the bodies:
+  /// the implicit slip's re-solves that only move the soil rows' levels (rover_step.cpp). Then
+  /// J, A and the rows stay, and only the right-hand side is formed again (ODE's rhs = c / h -
+  /// J (v / h + M⁻¹ f_ext)) and solved with the kept LDLᵀ factor: the bits step() would give.
+  /// Checked: the bodies' state (bit for bit, as restored), the world's parameters, h, the
+  /// attempt's joints but for their targets, and that the workspace still holds the factor.
+  /// Not checked (the caller's part): the permanent joints' parameters are those of the last
+  /// step(); forget() when they change. Anything else is a step().
+  Outcome resolve(dWorldID world, double h, LcpWorkspace& ws);
+  /// The permanent joints' parameters may have changed: the next resolve() is a step().
+  void forget() { kept_ = false; }
 
  private:
   enum class Kind : std::int8_t { Hinge, Universal, AMotor, Contact, LMotor };
@@ -80,6 +98,13 @@ class IslandStep {
     double inv_mass;
   };
   int body_index(dBodyID b) const;
+  bool bodies_supported() const;
+  void load_forces(int i, const dVector3 gravity);
+  void form_rhs(int m, double fps, bool with_jm);
+  bool solve(LcpWorkspace& ws, std::uint64_t kept_factor);
+  void apply(double h);
+  bool same_problem(dWorldID world, double h, const LcpWorkspace& ws);
+  int attempt_targets(const Joint& jt, double fps, double erp, double* c) const;
   Joint& add_permanent(dJointID j, Kind kind);
   bool add_rows(Joint& jt, double fps, double erp);
   bool hinge_rows(Joint& jt, double fps, double erp);
@@ -117,7 +142,8 @@ class IslandStep {
   std::array<std::array<dReal, 12>, kBodies> inertia_body_{};
   std::array<Joint, 16> permanent_{};
   int n_permanent_ = 0;
-  std::array<Joint, kMaxAttemptJoints> attempt_{};
+  std::array<std::array<Joint, kMaxAttemptJoints>, 2> attempts_{};  // two buffers (clear_attempt)
+  int cur_ = 0;  // this attempt's buffer
   int n_attempt_ = 0;
 
   // ---- this step's working data (preallocated)
@@ -141,6 +167,17 @@ class IslandStep {
   std::array<std::array<double, kMaxRows>, 6> jb_{};
   std::array<int, kMaxRows> side_{};
   std::array<std::array<double, 6>, kBodies> cforce_{};
+
+  // ---- what resolve() keeps of the last step() (valid while kept_)
+  bool kept_ = false;
+  int kept_buf_ = -1, kept_n_attempt_ = 0, kept_nub_ = 0, n_permanent_order_ = 0;
+  std::uint64_t kept_factor_ = 0;  // LcpWorkspace::factors after the solve
+  double kept_h_ = 0.0, kept_erp_ = 0.0;
+  std::array<double, 3> kept_gravity_{};
+  std::array<std::array<double, 25>, kBodies> kept_state_{};  // pos, q, R (3x4), v, w: bits
+  std::array<std::array<double, 3>, kBodies> gyro_{};  // stage 0's gyroscopic torque
+  std::array<bool, kBodies> has_gyro_{};
+  std::array<double, kMaxRows> c_{};  // the rows' right-hand sides before stage 2a's 1 / h
 };
 
 }  // namespace ernest::dynamics::detail

@@ -129,6 +129,7 @@ class SimOptions:
     guess_obstacle_contacts: bool
     sparse_lcp: bool
     stepper: Stepper
+    resolve_rhs_only: bool
     max_speed: float
     max_angular_speed: float
     slip_force_tolerance: float
@@ -153,6 +154,7 @@ class SolverStats:
     obstacle_implicit: int
     own_steps: int
     own_fallbacks: int
+    rhs_resolves: int
     plans_made: int
     plans_grown: int
     obstacles_touched: int
