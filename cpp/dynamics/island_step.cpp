@@ -131,7 +131,7 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
   }
 
   // ---- stage 2b/2c: rhs = c / h - J (v / h + M⁻¹ f), and A
-  form_rhs(m, fps, true);
+  form_rhs<true>(m, fps);
   build_a(m, h);
   kept_nub_ = nub;
   if (!solve(ws, 0)) return Outcome::SolveRefused;
@@ -147,8 +147,9 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
   return Outcome::Stepped;
 }
 
-// Stage 2b (and M⁻¹ Jᵀ of each row's sides with with_jm): bx -= J (v / h + M⁻¹ f) per side.
-void IslandStep::form_rhs(int m, double fps, bool with_jm) {
+// Stage 2b (and M⁻¹ Jᵀ of each row's sides with kWithJm): bx -= J (v / h + M⁻¹ f) per side.
+template <bool kWithJm>
+void IslandStep::form_rhs(int m, double fps) {
   std::array<std::array<double, 6>, kBodies> tmp1;
   for (int i = 0; i < kBodies; ++i) {
     const BodyState& s = bs_[i];
@@ -165,7 +166,7 @@ void IslandStep::form_rhs(int m, double fps, bool with_jm) {
       double sum = J[0] * tmp1[bi][0];
       for (int c = 1; c < 6; ++c) sum += J[c] * tmp1[bi][c];
       bx_[2 * r] -= sum;
-      if (!with_jm) continue;
+      if (!kWithJm) continue;
       // M⁻¹ Jᵀ of this side: J_lin / m, invI J_ang (invI symmetric)
       double* JM = &jm_[r][6 * side];
       for (int c = 0; c < 3; ++c) JM[c] = J[c] * bs_[bi].inv_mass;
@@ -295,7 +296,7 @@ IslandStep::Outcome IslandStep::resolve(dWorldID world, double h, LcpWorkspace& 
     for (int q = 0; q < n; ++q) bx_[2 * (jt.first + q)] = c_[jt.first + q] = c[q];
   }
   for (int r = 0; r < m_; ++r) bx_[2 * r] *= fps;
-  form_rhs(m_, fps, false);
+  form_rhs<false>(m_, fps);
   kept_ = false;
   if (!solve(ws, kept_factor_)) return Outcome::SolveRefused;
   apply(h);

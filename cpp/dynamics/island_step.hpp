@@ -100,7 +100,8 @@ class IslandStep {
   int body_index(dBodyID b) const;
   bool bodies_supported() const;
   void load_forces(int i, const dVector3 gravity);
-  void form_rhs(int m, double fps, bool with_jm);
+  template <bool kWithJm>
+  void form_rhs(int m, double fps);
   bool solve(LcpWorkspace& ws, std::uint64_t kept_factor);
   void apply(double h);
   bool same_problem(dWorldID world, double h, const LcpWorkspace& ws);
