@@ -13,10 +13,14 @@
 
 namespace ernest::dynamics::detail {
 
+// The step's parts, inlined into step() and resolve() (the step's path as one function, as before
+// resolve() shared them).
+#define ERNEST_INLINE __attribute__((always_inline)) inline
+
 // Only our joints may act on our bodies (each permanent joint joins two of them), and the
 // bodies must be plain dynamic ones: dxStepBody's options (finite rotation, speed cap, damping)
 // and disabled or kinematic bodies are not reproduced.
-bool IslandStep::bodies_supported() const {
+ERNEST_INLINE bool IslandStep::bodies_supported() const {
   int attached = 0;
   for (dBodyID b : body_) {
     if (!dBodyIsEnabled(b) || dBodyIsKinematic(b) || dBodyGetFiniteRotationMode(b) != 0 ||
@@ -30,7 +34,7 @@ bool IslandStep::bodies_supported() const {
 
 // Stage 0's accumulators: the force plus gravity, the torque plus the gyroscopic torque (gyro_,
 // computed by step() from the body's state).
-void IslandStep::load_forces(int i, const dVector3 gravity) {
+ERNEST_INLINE void IslandStep::load_forces(int i, const dVector3 gravity) {
   BodyState& s = bs_[i];
   const dBodyID b = body_[i];
   const dReal* f = dBodyGetForce(b);
@@ -42,6 +46,72 @@ void IslandStep::load_forces(int i, const dVector3 gravity) {
   }
   if (has_gyro_[i])
     for (int c = 0; c < 3; ++c) s.tacc_g[c] += gyro_[i][c];
+}
+
+// Stage 2b (and M⁻¹ Jᵀ of each row's sides with kWithJm): bx -= J (v / h + M⁻¹ f) per side.
+template <bool kWithJm>
+ERNEST_INLINE void IslandStep::form_rhs(int m, double fps) {
+  std::array<std::array<double, 6>, kBodies> tmp1;
+  for (int i = 0; i < kBodies; ++i) {
+    const BodyState& s = bs_[i];
+    for (int c = 0; c < 3; ++c) tmp1[i][c] = s.facc_g[c] * s.inv_mass + s.lvel[c] * fps;
+    dMultiply0_331(&tmp1[i][3], s.invI, s.tacc_g);
+    for (int c = 0; c < 3; ++c) tmp1[i][3 + c] += s.avel[c] * fps;
+  }
+  for (int r = 0; r < m; ++r) {
+    const int sides[2] = {ra_[r], rb_[r]};
+    for (int side = 0; side < 2; ++side) {
+      const int bi = sides[side];
+      if (bi < 0) continue;
+      const double* J = &j_[r][6 * side];
+      double sum = J[0] * tmp1[bi][0];
+      for (int c = 1; c < 6; ++c) sum += J[c] * tmp1[bi][c];
+      bx_[2 * r] -= sum;
+      if (!kWithJm) continue;
+      // M⁻¹ Jᵀ of this side: J_lin / m, invI J_ang (invI symmetric)
+      double* JM = &jm_[r][6 * side];
+      for (int c = 0; c < 3; ++c) JM[c] = J[c] * bs_[bi].inv_mass;
+      dMultiply0_133(JM + 3, J + 3, bs_[bi].invI);
+    }
+  }
+}
+
+// Stage 3: the solve (kept_factor: resolve()'s, see solve_sparse).
+ERNEST_INLINE bool IslandStep::solve(LcpWorkspace& ws, std::uint64_t kept_factor) {
+  if (m_ == 0) return true;
+  if (!solve_sparse(ws, static_cast<unsigned>(m_), a_.data(), bx_.data(), nullptr,
+                    static_cast<unsigned>(kept_nub_), lh_.data(), findex_.data(), kept_factor))
+    return false;
+  ++ws.sparse;
+  return true;
+}
+
+// Stage 4: constraint forces, feedback, velocities and poses.
+ERNEST_INLINE void IslandStep::apply(double h) {
+  for (auto& f : cforce_) f.fill(0.0);
+  for (int k = 0; k < n_order_; ++k) {
+    const Joint& jt = *order_[k];
+    if (jt.rows == 0) continue;  // ODE drops joints without rows (their feedback stays)
+    for (int side = 0; side < 2; ++side) {
+      const int bi = side == 0 ? jt.row_a : jt.row_b;
+      if (bi < 0) continue;
+      double sum[6] = {0, 0, 0, 0, 0, 0};
+      for (int r = jt.first; r < jt.first + jt.rows; ++r) {
+        const double lambda = bx_[2 * r + 1];
+        for (int c = 0; c < 6; ++c) sum[c] += j_[r][6 * side + c] * lambda;
+      }
+      if (jt.fb) {
+        dReal* f = side == 0 ? jt.fb->f1 : jt.fb->f2;
+        dReal* t = side == 0 ? jt.fb->t1 : jt.fb->t2;
+        for (int c = 0; c < 3; ++c) {
+          f[c] = sum[c];
+          t[c] = sum[3 + c];
+        }
+      }
+      for (int c = 0; c < 6; ++c) cforce_[bi][c] += sum[c];
+    }
+  }
+  integrate(h);
 }
 
 IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws) {
@@ -67,11 +137,13 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
     s.avel = dBodyGetAngularVel(b);
     s.inv_mass = 1.0 / mass_[i];
     double* kept = kept_state_[i].data();  // (resolve() compares the state it starts from)
-    std::copy(s.pos, s.pos + 3, kept);
-    std::copy(s.q, s.q + 4, kept + 3);
-    std::copy(s.R, s.R + 12, kept + 7);
-    std::copy(s.lvel, s.lvel + 3, kept + 19);
-    std::copy(s.avel, s.avel + 3, kept + 22);
+    for (int c = 0; c < 3; ++c) {  // (element by element: std::copy calls memmove per range)
+      kept[c] = s.pos[c];
+      kept[19 + c] = s.lvel[c];
+      kept[22 + c] = s.avel[c];
+    }
+    for (int c = 0; c < 4; ++c) kept[3 + c] = s.q[c];
+    for (int c = 0; c < 12; ++c) kept[7 + c] = s.R[c];
     dMatrix3 tmp;
     dMultiply2_333(tmp, inv_inertia_body_[i].data(), s.R);
     dMultiply0_333(s.invI, s.R, tmp);
@@ -145,72 +217,6 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
   kept_erp_ = erp;
   for (int c = 0; c < 3; ++c) kept_gravity_[c] = gravity[c];
   return Outcome::Stepped;
-}
-
-// Stage 2b (and M⁻¹ Jᵀ of each row's sides with kWithJm): bx -= J (v / h + M⁻¹ f) per side.
-template <bool kWithJm>
-void IslandStep::form_rhs(int m, double fps) {
-  std::array<std::array<double, 6>, kBodies> tmp1;
-  for (int i = 0; i < kBodies; ++i) {
-    const BodyState& s = bs_[i];
-    for (int c = 0; c < 3; ++c) tmp1[i][c] = s.facc_g[c] * s.inv_mass + s.lvel[c] * fps;
-    dMultiply0_331(&tmp1[i][3], s.invI, s.tacc_g);
-    for (int c = 0; c < 3; ++c) tmp1[i][3 + c] += s.avel[c] * fps;
-  }
-  for (int r = 0; r < m; ++r) {
-    const int sides[2] = {ra_[r], rb_[r]};
-    for (int side = 0; side < 2; ++side) {
-      const int bi = sides[side];
-      if (bi < 0) continue;
-      const double* J = &j_[r][6 * side];
-      double sum = J[0] * tmp1[bi][0];
-      for (int c = 1; c < 6; ++c) sum += J[c] * tmp1[bi][c];
-      bx_[2 * r] -= sum;
-      if (!kWithJm) continue;
-      // M⁻¹ Jᵀ of this side: J_lin / m, invI J_ang (invI symmetric)
-      double* JM = &jm_[r][6 * side];
-      for (int c = 0; c < 3; ++c) JM[c] = J[c] * bs_[bi].inv_mass;
-      dMultiply0_133(JM + 3, J + 3, bs_[bi].invI);
-    }
-  }
-}
-
-// Stage 3: the solve (kept_factor: resolve()'s, see solve_sparse).
-bool IslandStep::solve(LcpWorkspace& ws, std::uint64_t kept_factor) {
-  if (m_ == 0) return true;
-  if (!solve_sparse(ws, static_cast<unsigned>(m_), a_.data(), bx_.data(), nullptr,
-                    static_cast<unsigned>(kept_nub_), lh_.data(), findex_.data(), kept_factor))
-    return false;
-  ++ws.sparse;
-  return true;
-}
-
-// Stage 4: constraint forces, feedback, velocities and poses.
-void IslandStep::apply(double h) {
-  for (auto& f : cforce_) f.fill(0.0);
-  for (int k = 0; k < n_order_; ++k) {
-    const Joint& jt = *order_[k];
-    if (jt.rows == 0) continue;  // ODE drops joints without rows (their feedback stays)
-    for (int side = 0; side < 2; ++side) {
-      const int bi = side == 0 ? jt.row_a : jt.row_b;
-      if (bi < 0) continue;
-      double sum[6] = {0, 0, 0, 0, 0, 0};
-      for (int r = jt.first; r < jt.first + jt.rows; ++r) {
-        const double lambda = bx_[2 * r + 1];
-        for (int c = 0; c < 6; ++c) sum[c] += j_[r][6 * side + c] * lambda;
-      }
-      if (jt.fb) {
-        dReal* f = side == 0 ? jt.fb->f1 : jt.fb->f2;
-        dReal* t = side == 0 ? jt.fb->t1 : jt.fb->t2;
-        for (int c = 0; c < 3; ++c) {
-          f[c] = sum[c];
-          t[c] = sum[3 + c];
-        }
-      }
-      for (int c = 0; c < 6; ++c) cforce_[bi][c] += sum[c];
-    }
-  }
-  integrate(h);
 }
 
 namespace {

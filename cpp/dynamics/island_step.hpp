@@ -43,11 +43,13 @@ class IslandStep {
   void add_universal(dJointID j);
   void add_amotor(dJointID j);
 
-  /// This attempt's own joints: recorded here instead of created in ODE (clear: none). Two
-  /// buffers in turn: the last stepped attempt's joints stay for resolve() to compare.
+  /// This attempt's own joints: recorded here instead of created in ODE (clear: none). While
+  /// resolve() may follow, the other of two buffers: the stepped attempt's joints stay to compare.
   void clear_attempt() {
-    if (cur_ != kept_buf_) kept_ = false;  // a second attempt recorded since the kept one
-    cur_ ^= 1;
+    if (kept_) {
+      if (cur_ == kept_buf_) cur_ ^= 1;
+      else kept_ = false;  // a second attempt recorded since the kept one
+    }
     n_attempt_ = 0;
   }
   /// A contact as dJointCreateContact + dJointAttach(b1, b2) + dJointSetFeedback(fb) would make.
