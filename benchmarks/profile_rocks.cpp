@@ -58,14 +58,14 @@ int main(int argc, char** argv) {
   const SolverStats& s = sim.solver_stats();
   std::printf("%zu rocks: x %.3f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
               "bounded %llu; slip solves %llu, driving %llu; guesses first %llu later %llu "
-              "pivoted %llu; contacts explicit %llu implicit %llu; own steps %llu fallbacks %llu rhs %llu; plans made %llu grown %llu; state x %.17g z %.17g vx %.17g\n",
+              "pivoted %llu; contacts explicit %llu implicit %llu; own steps %llu fallbacks %llu rhs %llu caps %llu; plans made %llu grown %llu; state x %.17g z %.17g vx %.17g\n",
               rocks.size(), sim.state().position.x(), (unsigned long long)s.sparse_solves,
               (unsigned long long)s.dense_solves, (unsigned long long)s.obstacle_guessed,
               (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves,
               (unsigned long long)s.slip_driving, (unsigned long long)s.first_guess,
               (unsigned long long)s.later_guess, (unsigned long long)s.pivoted,
               (unsigned long long)s.obstacle_explicit, (unsigned long long)s.obstacle_implicit,
-              (unsigned long long)s.own_steps, (unsigned long long)s.own_fallbacks, (unsigned long long)s.rhs_resolves,
+              (unsigned long long)s.own_steps, (unsigned long long)s.own_fallbacks, (unsigned long long)s.rhs_resolves, (unsigned long long)s.cap_resolves,
               (unsigned long long)s.plans_made, (unsigned long long)s.plans_grown, sim.state().position.x(),
               sim.state().position.z(), sim.state().linear_velocity.x());
   return 0;

@@ -206,7 +206,8 @@ void bind_dynamics(py::module_& m) {
       .def_readwrite("resolve_rhs_only", &SimOptions::resolve_rhs_only,
                      "Own stepper: a re-solve whose rows are the last attempt's (the implicit "
                      "slip's level-only solves) keeps its rows, A and LDL^T factor and solves a "
-                     "new right-hand side (the same bits); False rebuilds every attempt")
+                     "new right-hand side; one that only moved the soil rows' caps keeps the "
+                     "rows and A off its diagonal (the same bits); False rebuilds every attempt")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,
@@ -316,6 +317,9 @@ void bind_dynamics(py::module_& m) {
       .def_readonly("rhs_resolves", &SolverStats::rhs_resolves,
                     "own steps solved as a new right-hand side of the last attempt's rows and "
                     "factor (SimOptions.resolve_rhs_only)")
+      .def_readonly("cap_resolves", &SolverStats::cap_resolves,
+                    "own steps that kept the last attempt's rows with new bounds and CFMs (A's "
+                    "diagonal), factorised again (SimOptions.resolve_rhs_only)")
       .def_readonly("plans_made", &SolverStats::plans_made,
                     "sparse solves' symbolic analyses for row sets not remembered")
       .def_readonly("plans_grown", &SolverStats::plans_grown,
@@ -341,7 +345,8 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.obstacle_implicit) + ", own_steps=" +
                std::to_string(s.own_steps) + ", own_fallbacks=" +
                std::to_string(s.own_fallbacks) + ", rhs_resolves=" +
-               std::to_string(s.rhs_resolves) + ", plans_made=" +
+               std::to_string(s.rhs_resolves) + ", cap_resolves=" +
+               std::to_string(s.cap_resolves) + ", plans_made=" +
                std::to_string(s.plans_made) + ", plans_grown=" +
                std::to_string(s.plans_grown) + ", fast_lcp=" +
                (s.fast_lcp ? "True" : "False") + ")";

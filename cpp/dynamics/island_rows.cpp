@@ -87,7 +87,7 @@ void IslandStep::add_contact(const dContact& c, dBodyID b1, dBodyID b2, dJointFe
     ++n_attempt_;
     return;
   }
-  Joint& jt = attempts_[cur_][n_attempt_++];
+  Joint& jt = buffer(cur_)[n_attempt_++];
   jt.kind = Kind::Contact;
   jt.contact = c;
   jt.a = body_index(b1);
@@ -100,7 +100,7 @@ void IslandStep::add_lmotor(dBodyID b, const double axis[3], double vel, double 
     ++n_attempt_;
     return;
   }
-  Joint& jt = attempts_[cur_][n_attempt_++];
+  Joint& jt = buffer(cur_)[n_attempt_++];
   jt.kind = Kind::LMotor;
   jt.a = body_index(b);
   jt.b = -1;
@@ -114,7 +114,7 @@ void IslandStep::add_lmotor(dBodyID b, const double axis[3], double vel, double 
 void IslandStep::materialise(dWorldID world, dJointGroupID group) const {
   const int n = std::min(n_attempt_, kMaxAttemptJoints);
   for (int k = 0; k < n; ++k) {
-    const Joint& jt = attempts_[cur_][k];
+    const Joint& jt = buffer(cur_)[k];
     const dBodyID a = jt.a >= 0 ? body_[jt.a] : nullptr, b = jt.b >= 0 ? body_[jt.b] : nullptr;
     if (jt.kind == Kind::Contact) {
       dJointID j = dJointCreateContact(world, group, &jt.contact);

@@ -190,8 +190,8 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
   }
   n_permanent_order_ = n_order_;
   for (int k = 0; k < n_attempt_; ++k) {
-    if (!add_rows(attempts_[cur_][k], fps, erp)) return Outcome::Unsupported;
-    order_[n_order_++] = &attempts_[cur_][k];
+    if (!add_rows(buffer(cur_)[k], fps, erp)) return Outcome::Unsupported;
+    order_[n_order_++] = &buffer(cur_)[k];
   }
   const int m = m_;
   for (int r = 0; r < m; ++r) {
@@ -228,10 +228,13 @@ bool same_bits(const double* x, const double* y, int n) {
 }  // namespace
 
 // resolve()'s checks (island_step.hpp): everything step() reads but the attempt's targets and
-// the forces on the bodies is as the kept step read it.
-bool IslandStep::same_problem(dWorldID world, double h, const LcpWorkspace& ws) {
-  if (!kept_ || kept_buf_ == cur_ || !ws.enabled || n_attempt_ != kept_n_attempt_) return false;
-  if (m_ > 0 && ws.factors != kept_factor_) return false;  // another solve factorised since
+// caps (contacts' mu and slip, linear motors' fmax and CFM: the rows' bounds and CFMs, not which
+// rows there are) and the forces on the bodies is as the kept step read it. Same: the caps too,
+// and the workspace still holds the kept step's factor.
+IslandStep::Match IslandStep::same_problem(dWorldID world, double h, const LcpWorkspace& ws) {
+  constexpr Match kDifferent = Match::Different;
+  if (!kept_ || kept_buf_ == cur_ || !ws.enabled || n_attempt_ != kept_n_attempt_) return kDifferent;
+  bool caps = m_ > 0 && ws.factors != kept_factor_;  // another solve factorised since
   dVector3 g;
   dWorldGetGravity(world, g);
   const double world_now[8] = {h, dWorldGetERP(world), dWorldGetCFM(world),
@@ -239,7 +242,7 @@ bool IslandStep::same_problem(dWorldID world, double h, const LcpWorkspace& ws) 
                                dWorldGetContactMaxCorrectingVel(world), g[0], g[1], g[2]};
   const double world_kept[8] = {kept_h_, kept_erp_, world_cfm_, min_depth_, max_vel_,
                                 kept_gravity_[0], kept_gravity_[1], kept_gravity_[2]};
-  if (!same_bits(world_now, world_kept, 8) || !bodies_supported()) return false;
+  if (!same_bits(world_now, world_kept, 8) || !bodies_supported()) return kDifferent;
   for (int i = 0; i < kBodies; ++i) {
     const dBodyID b = body_[i];
     const double* kept = kept_state_[i].data();
@@ -247,35 +250,72 @@ bool IslandStep::same_problem(dWorldID world, double h, const LcpWorkspace& ws) 
         !same_bits(dBodyGetRotation(b), kept + 7, 12) ||
         !same_bits(dBodyGetLinearVel(b), kept + 19, 3) ||
         !same_bits(dBodyGetAngularVel(b), kept + 22, 3))
-      return false;
+      return kDifferent;
   }
-  const Joint* before = attempts_[kept_buf_].data();
-  const Joint* now = attempts_[cur_].data();
+  const Joint* before = buffer(kept_buf_);
+  const Joint* now = buffer(cur_);
   for (int k = 0; k < n_attempt_; ++k) {
     const Joint &x = now[k], &y = before[k];
-    if (x.kind != y.kind || x.a != y.a || x.b != y.b || x.fb != y.fb) return false;
+    if (x.kind != y.kind || x.a != y.a || x.b != y.b || x.fb != y.fb) return kDifferent;
     if (x.kind == Kind::LMotor) {
-      const double u[5] = {x.lm_axis[0], x.lm_axis[1], x.lm_axis[2], x.lm_fmax, x.lm_cfm};
-      const double v[5] = {y.lm_axis[0], y.lm_axis[1], y.lm_axis[2], y.lm_fmax, y.lm_cfm};
-      if (!same_bits(u, v, 5)) return false;
+      if (!same_bits(x.lm_axis, y.lm_axis, 3) || (x.lm_fmax > 0.0) != (y.lm_fmax > 0.0))
+        return kDifferent;
+      const double u[2] = {x.lm_fmax, x.lm_cfm}, v[2] = {y.lm_fmax, y.lm_cfm};
+      caps = caps || !same_bits(u, v, 2);
       continue;
     }
     const dContact &p = x.contact, &q = y.contact;
-    if (p.surface.mode != q.surface.mode) return false;
-    const auto fields = [](const dContact& c, double* f) {  // all but the motions (targets)
+    if (p.surface.mode != q.surface.mode) return kDifferent;
+    const auto fields = [](const dContact& c, double* f) {  // all but the motions and caps
       const dSurfaceParameters& s = c.surface;
-      const double v[21] = {s.mu, s.mu2, s.rho, s.rho2, s.rhoN, s.bounce, s.bounce_vel,
-                            s.soft_erp, s.soft_cfm, s.slip1, s.slip2, c.geom.depth,
-                            c.geom.pos[0], c.geom.pos[1], c.geom.pos[2], c.geom.normal[0],
-                            c.geom.normal[1], c.geom.normal[2], c.fdir1[0], c.fdir1[1], c.fdir1[2]};
-      std::copy(v, v + 21, f);
+      const double v[17] = {s.rho, s.rho2, s.rhoN, s.bounce, s.bounce_vel, s.soft_erp, s.soft_cfm,
+                            c.geom.depth, c.geom.pos[0], c.geom.pos[1], c.geom.pos[2],
+                            c.geom.normal[0], c.geom.normal[1], c.geom.normal[2], c.fdir1[0],
+                            c.fdir1[1], c.fdir1[2]};
+      std::copy(v, v + 17, f);
     };
-    double u[21], v[21];
+    double u[17], v[17];
     fields(p, u);
     fields(q, v);
-    if (!same_bits(u, v, 21)) return false;
+    if (!same_bits(u, v, 17)) return kDifferent;
+    // the same friction rows (mu > 0: contact_rows), perhaps other bounds and CFMs
+    if ((p.surface.mu > 0.0) != (q.surface.mu > 0.0) || (p.surface.mu2 > 0.0) != (q.surface.mu2 > 0.0))
+      return kDifferent;
+    const double cu[4] = {p.surface.mu, p.surface.mu2, p.surface.slip1, p.surface.slip2};
+    const double cv[4] = {q.surface.mu, q.surface.mu2, q.surface.slip1, q.surface.slip2};
+    caps = caps || !same_bits(cu, cv, 4);
   }
-  return true;
+  return caps ? Match::Caps : Match::Same;
+}
+
+// An attempt joint's caps again (Match::Caps): its friction or motor rows' bounds and CFMs as
+// contact_rows / lmotor_rows set them (the CFM over h as stage 2a), and those rows' diagonal of A
+// as build_a sums it (the CFM, then each body's product: build_a's diag_).
+void IslandStep::attempt_caps(const Joint& jt, double fps) {
+  const int stride = dPAD(m_);
+  const auto set = [&](int r, double cfm, double bound) {
+    cfm_[r] = cfm * fps;
+    lh_[2 * r] = -bound;
+    lh_[2 * r + 1] = bound;
+    double d = cfm_[r];
+    for (int k = 0; k < n_diag_[r]; ++k) d += diag_[r][k];
+    a_[static_cast<std::size_t>(r) * stride + r] = d;
+  };
+  if (jt.kind == Kind::LMotor) {
+    if (jt.rows == 1) set(jt.first, jt.lm_cfm, jt.lm_fmax);
+    return;
+  }
+  const dSurfaceParameters& s = jt.contact.surface;
+  const double mu1 = s.mu < 0.0 ? 0.0 : s.mu;
+  const double mu2 = (s.mode & dContactAxisDep) ? (s.mu2 < 0.0 ? 0.0 : s.mu2) : mu1;
+  const double mu[2] = {mu1, mu2};
+  const int slip[2] = {dContactSlip1, dContactSlip2};
+  const double sval[2] = {s.slip1, s.slip2};
+  int r = jt.first + 1;  // the friction rows follow the normal row
+  for (int d = 0; d < 2 && r < jt.first + jt.rows; ++d) {
+    if (!(mu[d] > 0.0)) continue;
+    set(r++, (s.mode & slip[d]) ? sval[d] : world_cfm_, mu[d]);
+  }
 }
 
 // The kept step's problem again with the new targets and forces: stage 0's accumulators, the
@@ -283,14 +323,15 @@ bool IslandStep::same_problem(dWorldID world, double h, const LcpWorkspace& ws) 
 // M⁻¹ Jᵀ, the solve with the kept factor, stage 4. Each value is computed as step() computes it,
 // from the same inputs: the same bits.
 IslandStep::Outcome IslandStep::resolve(dWorldID world, double h, LcpWorkspace& ws) {
-  if (!same_problem(world, h, ws)) return step(world, h, ws);
+  const Match match = same_problem(world, h, ws);
+  if (match == Match::Different) return step(world, h, ws);
   const double fps = 1.0 / h;
   const dVector3 gravity = {kept_gravity_[0], kept_gravity_[1], kept_gravity_[2], 0.0};
   for (int i = 0; i < kBodies; ++i) load_forces(i, gravity);
   for (int r = 0; r < m_; ++r) bx_[2 * r] = c_[r];
-  const Joint* before = attempts_[kept_buf_].data();
+  const Joint* before = buffer(kept_buf_);
   for (int k = 0; k < n_attempt_; ++k) {
-    Joint& jt = attempts_[cur_][k];
+    Joint& jt = buffer(cur_)[k];
     const Joint& y = before[k];
     jt.first = y.first;
     jt.rows = y.rows;
@@ -300,16 +341,17 @@ IslandStep::Outcome IslandStep::resolve(dWorldID world, double h, LcpWorkspace& 
     double c[3];
     const int n = std::min(attempt_targets(jt, fps, kept_erp_, c), jt.rows);
     for (int q = 0; q < n; ++q) bx_[2 * (jt.first + q)] = c_[jt.first + q] = c[q];
+    if (match == Match::Caps) attempt_caps(jt, fps);
   }
   for (int r = 0; r < m_; ++r) bx_[2 * r] *= fps;
   form_rhs<false>(m_, fps);
   kept_ = false;
-  if (!solve(ws, kept_factor_)) return Outcome::SolveRefused;
+  if (!solve(ws, match == Match::Same ? kept_factor_ : 0)) return Outcome::SolveRefused;
   apply(h);
   kept_ = true;
   kept_buf_ = cur_;
   kept_factor_ = ws.factors;  // (a guess flipped in the solve factorised the same A again)
-  return Outcome::Resolved;
+  return match == Match::Same ? Outcome::Resolved : Outcome::ResolvedCaps;
 }
 
 // A's lower triangle (row stride dPAD(m), ODE's layout for the solver), body by body: the rows
@@ -325,6 +367,7 @@ void IslandStep::build_a(int m, double h) {
     double* row = &a_[static_cast<std::size_t>(r) * stride];
     std::fill(row, row + std::min(r + 2, stride), 0.0);
     row[r] = cfm_[r];
+    n_diag_[r] = 0;
   }
   std::array<int, kMaxRows> rows;
   std::array<double, kMaxRows> dot;
@@ -345,6 +388,7 @@ void IslandStep::build_a(int m, double h) {
         dot[q] = ((m0 * j0[q] + m1 * j1[q]) + (m2 * j2[q] + m3 * j3[q])) + (m4 * j4[q] + m5 * j5[q]);
       double* arow = &a_[static_cast<std::size_t>(rows[p]) * stride];
       for (int q = 0; q <= p; ++q) arow[rows[q]] += dot[q];
+      diag_[rows[p]][n_diag_[rows[p]]++] = dot[p];  // (resolve() adds them to a new CFM)
     }
   }
 }

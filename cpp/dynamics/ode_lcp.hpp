@@ -55,11 +55,6 @@ struct LcpWorkspace {
   std::array<Guess, kGuesses> guesses{};
   int next_guess = 0;
   SparseLdlt ldlt;
-  /// Factorisations made in ldlt (a serial: 0 none yet; clear() counts one, its plans go), and
-  /// the last one's rows and problem size: what solve_sparse's kept_factor refers to.
-  std::uint64_t factors = 0;
-  LdltPlan::Mask factored = 0;
-  unsigned factored_n = 0;
   std::uint64_t sparse = 0;    // solves done here
   std::uint64_t dense = 0;     // solves handed to ODE's Dantzig solver
   /// Correct ODE's friction (findex) bounds to mu times the final normal force (solve_coulomb in
@@ -81,6 +76,11 @@ struct LcpWorkspace {
   std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> a_copy{};
   std::array<double, 2 * LdltPlan::kMaxRows> bx_copy{}, lh_copy{};
   std::array<int, LdltPlan::kMaxRows> findex_copy{};
+  /// Factorisations made in ldlt (a serial: 0 none yet; clear() counts one, its plans go), and
+  /// the last one's rows and problem size: what solve_sparse's kept_factor refers to.
+  std::uint64_t factors = 0;
+  LdltPlan::Mask factored = 0;
+  unsigned factored_n = 0;
 
   /// The remembered plan for these rows, or nullptr.
   LdltPlan* find(const unsigned* rows, int n, int stride);

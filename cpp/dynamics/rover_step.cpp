@@ -248,9 +248,11 @@ void RoverSim::Impl::world_step() {
   }
   const detail::IslandStep::Outcome r =
       opt.resolve_rhs_only ? island.resolve(world, h, lcp) : island.step(world, h, lcp);
-  if (r == detail::IslandStep::Outcome::Stepped || r == detail::IslandStep::Outcome::Resolved) {
+  using Outcome = detail::IslandStep::Outcome;
+  if (r == Outcome::Stepped || r == Outcome::Resolved || r == Outcome::ResolvedCaps) {
     ++stats.own_steps;
-    if (r == detail::IslandStep::Outcome::Resolved) ++stats.rhs_resolves;
+    if (r == Outcome::Resolved) ++stats.rhs_resolves;
+    if (r == Outcome::ResolvedCaps) ++stats.cap_resolves;
     return;
   }
   ++stats.own_fallbacks;

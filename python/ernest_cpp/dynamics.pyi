@@ -155,6 +155,7 @@ class SolverStats:
     own_steps: int
     own_fallbacks: int
     rhs_resolves: int
+    cap_resolves: int
     plans_made: int
     plans_grown: int
     obstacles_touched: int

@@ -232,7 +232,7 @@ Commands varied(int k) {
 
 // The same run with SimOptions::resolve_rhs_only on and off: every step's state vector (drive
 // torques, loads, FTS wrenches) and bodies to the bit, and the same SolverStats but for the
-// count of resolves. Returns the resolves of the run with it on.
+// counts of resolves (right-hand sides, and new caps). Returns the rhs resolves with it on.
 std::uint64_t resolves_give_the_bits_of_rebuilds(const HeightMap& hm,
                                                  const std::vector<BoxObstacle>& obstacles,
                                                  int steps, double x0) {
@@ -278,7 +278,9 @@ std::uint64_t resolves_give_the_bits_of_rebuilds(const HeightMap& hm,
                               y.plans_grown};
   for (std::size_t i = 0; i < std::size(fa); ++i) EXPECT_EQ(fa[i], fb[i]) << "SolverStats field " << i;
   EXPECT_EQ(y.rhs_resolves, 0u);
-  EXPECT_LT(x.rhs_resolves, x.own_steps);
+  EXPECT_EQ(y.cap_resolves, 0u);
+  EXPECT_LT(x.rhs_resolves + x.cap_resolves, x.own_steps);
+  EXPECT_GT(x.cap_resolves, 0u) << "slip re-solves that moved the caps must take the caps path";
   EXPECT_GE(touching, obstacles.empty() ? 0 : 100) << "the rocks must be touched";
   return x.rhs_resolves;
 }

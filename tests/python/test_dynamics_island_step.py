@@ -58,6 +58,7 @@ def test_right_hand_side_resolves_give_the_same_bits():
     on, off = _run(D.Stepper.Own), _run(D.Stepper.Own, resolve_rhs_only=False)
     son, soff = on.solver_stats, off.solver_stats
     assert 0 < son.rhs_resolves < son.own_steps and soff.rhs_resolves == 0
-    assert f"rhs_resolves={son.rhs_resolves}" in repr(son)
+    assert son.cap_resolves >= 0 and soff.cap_resolves == 0
+    assert f"rhs_resolves={son.rhs_resolves}, cap_resolves={son.cap_resolves}" in repr(son)
     assert son.own_steps == soff.own_steps and son.slip_solves == soff.slip_solves
     np.testing.assert_array_equal(on.state_vector(), off.state_vector())
