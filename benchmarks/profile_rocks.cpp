@@ -7,7 +7,8 @@
 //   perf record -e cpu-clock -F 20000 -g build/bench/benchmarks/profile_rocks /tmp/rocks20.txt 800 1 1 1 200
 // SKIP steps more of run-up profile a later stretch (e.g. 240: the first rock contact among 20).
 // CONTACT chooses SimOptions::wheel_obstacle_contact (exact|ode; default: the option's default),
-// DT_DIVISOR divides SimOptions::dt (and multiplies every step count: the same simulated time).
+// DT_DIVISOR divides SimOptions::dt (and multiplies every step count: the same simulated time);
+// RESOLVE sets SimOptions::resolve_rhs_only (0|1; default on).
 // Prints the solver's counts.
 //   python benchmarks/bench_rocks.py --dump-rocks 20 /tmp/rocks20.txt
 //   valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*profiled_steps*' \
@@ -28,7 +29,7 @@ __attribute__((noinline)) void profiled_steps(RoverSim& sim, int steps) { sim.st
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [SKIP] [stepper ode|own] [contact exact|ode] [DT_DIVISOR]\n");
+    std::fprintf(stderr, "usage: profile_rocks ROCKS_FILE STEPS SUBSTEPS [guess 0|1] [slip_warm_start 0|1] [REPEATS] [SKIP] [stepper ode|own] [contact exact|ode] [DT_DIVISOR] [RESOLVE 0|1]\n");
     return 2;
   }
   std::vector<BoxObstacle> rocks;
@@ -48,6 +49,7 @@ int main(int argc, char** argv) {
                                                              : WheelObstacleContact::Exact;
   const int divisor = argc >= 11 ? std::max(1, std::atoi(argv[10])) : 1;
   o.dt /= divisor;
+  if (argc >= 12) o.resolve_rhs_only = std::atoi(argv[11]) != 0;
   const double speed = 0.15;
   RoverSim sim(RoverParameters{}, HeightMap::flat(40, 20, 0.25, 0, -10, -10), rocks, o);
   sim.reset(0, 0, 0, 0, 0, speed);
@@ -64,14 +66,15 @@ int main(int argc, char** argv) {
   const SolverStats& s = sim.solver_stats();
   std::printf("%zu rocks: x %.4f m; solves sparse %llu dense %llu; obstacle (sub)steps guessed %llu "
               "bounded %llu; slip solves %llu, driving %llu; guesses first %llu later %llu "
-              "pivoted %llu; contacts explicit %llu implicit %llu; own steps %llu fallbacks %llu; plans made %llu grown %llu\n",
+              "pivoted %llu; contacts explicit %llu implicit %llu; own steps %llu fallbacks %llu rhs %llu caps %llu; plans made %llu grown %llu; state x %.17g z %.17g vx %.17g\n",
               rocks.size(), sim.state().position.x(), (unsigned long long)s.sparse_solves,
               (unsigned long long)s.dense_solves, (unsigned long long)s.obstacle_guessed,
               (unsigned long long)s.obstacle_bounded, (unsigned long long)s.slip_solves,
               (unsigned long long)s.slip_driving, (unsigned long long)s.first_guess,
               (unsigned long long)s.later_guess, (unsigned long long)s.pivoted,
               (unsigned long long)s.obstacle_explicit, (unsigned long long)s.obstacle_implicit,
-              (unsigned long long)s.own_steps, (unsigned long long)s.own_fallbacks,
-              (unsigned long long)s.plans_made, (unsigned long long)s.plans_grown);
+              (unsigned long long)s.own_steps, (unsigned long long)s.own_fallbacks, (unsigned long long)s.rhs_resolves, (unsigned long long)s.cap_resolves,
+              (unsigned long long)s.plans_made, (unsigned long long)s.plans_grown, sim.state().position.x(),
+              sim.state().position.z(), sim.state().linear_velocity.x());
   return 0;
 }

@@ -214,6 +214,11 @@ void bind_dynamics(py::module_& m) {
                      "merged; WheelObstacleContact.Exact: a wheel's contact with a rock by the "
                      "exact separating-axis theorem of a cylinder and a box (depth, normal; the "
                      "point at the depth-weighted centre of the deepest features)")
+      .def_readwrite("resolve_rhs_only", &SimOptions::resolve_rhs_only,
+                     "Own stepper: a re-solve whose rows are the last attempt's (the implicit "
+                     "slip's level-only solves) keeps its rows, A and LDL^T factor and solves a "
+                     "new right-hand side; one that only moved the soil rows' caps keeps the "
+                     "rows and A off its diagonal (the same bits); False rebuilds every attempt")
       .def_readwrite("max_speed", &SimOptions::max_speed, "divergence threshold [m/s]")
       .def_readwrite("max_angular_speed", &SimOptions::max_angular_speed, "[rad/s]")
       .def_readwrite("slip_force_tolerance", &SimOptions::slip_force_tolerance,
@@ -320,6 +325,12 @@ void bind_dynamics(py::module_& m) {
                     "attempts stepped by our own island step (SimOptions.stepper = Own)")
       .def_readonly("own_fallbacks", &SolverStats::own_fallbacks,
                     "attempts our own island step handed to ODE's dWorldStep")
+      .def_readonly("rhs_resolves", &SolverStats::rhs_resolves,
+                    "own steps solved as a new right-hand side of the last attempt's rows and "
+                    "factor (SimOptions.resolve_rhs_only)")
+      .def_readonly("cap_resolves", &SolverStats::cap_resolves,
+                    "own steps that kept the last attempt's rows with new bounds and CFMs (A's "
+                    "diagonal), factorised again (SimOptions.resolve_rhs_only)")
       .def_readonly("plans_made", &SolverStats::plans_made,
                     "sparse solves' symbolic analyses for row sets not remembered")
       .def_readonly("plans_grown", &SolverStats::plans_grown,
@@ -344,7 +355,9 @@ void bind_dynamics(py::module_& m) {
                std::to_string(s.obstacle_explicit) + ", obstacle_implicit=" +
                std::to_string(s.obstacle_implicit) + ", own_steps=" +
                std::to_string(s.own_steps) + ", own_fallbacks=" +
-               std::to_string(s.own_fallbacks) + ", plans_made=" +
+               std::to_string(s.own_fallbacks) + ", rhs_resolves=" +
+               std::to_string(s.rhs_resolves) + ", cap_resolves=" +
+               std::to_string(s.cap_resolves) + ", plans_made=" +
                std::to_string(s.plans_made) + ", plans_grown=" +
                std::to_string(s.plans_grown) + ", fast_lcp=" +
                (s.fast_lcp ? "True" : "False") + ")";

@@ -47,6 +47,7 @@ void IslandStep::bind(const std::array<dBodyID, kBodies>& bodies) {
   }
   n_permanent_ = 0;
   n_attempt_ = 0;
+  kept_ = false;
 }
 
 int IslandStep::body_index(dBodyID b) const {
@@ -86,7 +87,7 @@ void IslandStep::add_contact(const dContact& c, dBodyID b1, dBodyID b2, dJointFe
     ++n_attempt_;
     return;
   }
-  Joint& jt = attempt_[n_attempt_++];
+  Joint& jt = buffer(cur_)[n_attempt_++];
   jt.kind = Kind::Contact;
   jt.contact = c;
   jt.a = body_index(b1);
@@ -99,7 +100,7 @@ void IslandStep::add_lmotor(dBodyID b, const double axis[3], double vel, double 
     ++n_attempt_;
     return;
   }
-  Joint& jt = attempt_[n_attempt_++];
+  Joint& jt = buffer(cur_)[n_attempt_++];
   jt.kind = Kind::LMotor;
   jt.a = body_index(b);
   jt.b = -1;
@@ -113,7 +114,7 @@ void IslandStep::add_lmotor(dBodyID b, const double axis[3], double vel, double 
 void IslandStep::materialise(dWorldID world, dJointGroupID group) const {
   const int n = std::min(n_attempt_, kMaxAttemptJoints);
   for (int k = 0; k < n; ++k) {
-    const Joint& jt = attempt_[k];
+    const Joint& jt = buffer(cur_)[k];
     const dBodyID a = jt.a >= 0 ? body_[jt.a] : nullptr, b = jt.b >= 0 ? body_[jt.b] : nullptr;
     if (jt.kind == Kind::Contact) {
       dJointID j = dJointCreateContact(world, group, &jt.contact);
@@ -279,7 +280,7 @@ bool IslandStep::lmotor_rows(Joint& jt) {
   const int r = new_row(jt, world_cfm_);
   if (r < 0) return false;
   for (int c = 0; c < 3; ++c) j_[r][c] = jt.lm_axis[c];  // one body: no torque decoupling
-  bx_[2 * r] = jt.lm_vel;
+  attempt_targets(jt, 0.0, 0.0, &bx_[2 * r]);  // lm_vel
   cfm_[r] = jt.lm_cfm;
   lh_[2 * r] = -jt.lm_fmax;
   lh_[2 * r + 1] = jt.lm_fmax;
@@ -309,12 +310,8 @@ bool IslandStep::contact_rows(Joint& jt, double fps, double erp) {
   for (int c = 0; c < 3; ++c) c1[c] = ct.geom.pos[c] - b0.pos[c];
   if (two)
     for (int c = 0; c < 3; ++c) c2[c] = ct.geom.pos[c] - bs_[jt.row_b].pos[c];
-  // normal row: rhs = fps erp depth + motionN capped by the world's correcting velocity
-  const double e = (s.mode & dContactSoftERP) ? s.soft_erp : erp;
-  double depth = ct.geom.depth - min_depth_;
-  if (depth < 0.0) depth = 0.0;
-  const double motion_n = (s.mode & dContactMotionN) ? s.motionN : 0.0;
-  const double pushout = fps * e * depth + motion_n;
+  double target[3];  // the rows' right-hand sides
+  attempt_targets(jt, fps, erp, target);
   const int first = m_;
   int r = new_row(jt, world_cfm_);
   if (r < 0) return false;
@@ -325,7 +322,7 @@ bool IslandStep::contact_rows(Joint& jt, double fps, double erp) {
     for (int c = 0; c < 3; ++c) j_[r][6 + c] = -normal[c];
     dCalcVectorCross3(&j_[r][9], normal, c2);
   }
-  bx_[2 * r] = pushout > max_vel_ ? max_vel_ : pushout;
+  bx_[2 * r] = target[0];
   if (s.mode & dContactSoftCFM) cfm_[r] = s.soft_cfm;
   lh_[2 * r] = 0.0;
   lh_[2 * r + 1] = kInf;
@@ -338,10 +335,10 @@ bool IslandStep::contact_rows(Joint& jt, double fps, double erp) {
     dPlaneSpace(normal, t[0], t[1]);
   }
   const double mu[2] = {mu1, mu2};
-  const int motion[2] = {dContactMotion1, dContactMotion2};
   const int slip[2] = {dContactSlip1, dContactSlip2};
   const int approx[2] = {dContactApprox1_1, dContactApprox1_2};
-  const double mval[2] = {s.motion1, s.motion2}, sval[2] = {s.slip1, s.slip2};
+  const double sval[2] = {s.slip1, s.slip2};
+  int next_target = 1;
   for (int d = 0; d < 2; ++d) {
     if (!(mu[d] > 0.0)) continue;
     r = new_row(jt, world_cfm_);
@@ -352,13 +349,38 @@ bool IslandStep::contact_rows(Joint& jt, double fps, double erp) {
       for (int c = 0; c < 3; ++c) j_[r][6 + c] = -t[d][c];
       dCalcVectorCross3(&j_[r][9], t[d], c2);
     }
-    if (s.mode & motion[d]) bx_[2 * r] = mval[d];
+    bx_[2 * r] = target[next_target++];
     if (s.mode & slip[d]) cfm_[r] = sval[d];
     lh_[2 * r] = -mu[d];
     lh_[2 * r + 1] = mu[d];
     if (s.mode & approx[d]) findex_[r] = first;
   }
   return true;
+}
+
+// The right-hand sides (before stage 2a's 1 / h) of an attempt joint's rows, in row order: a
+// contact's normal row (fps erp depth + motionN, capped by the world's correcting velocity) and
+// its friction rows (their motion), a linear motor's speed. All that differs between a step and
+// its resolve() (island_step.hpp); contact_rows and lmotor_rows take them from here.
+int IslandStep::attempt_targets(const Joint& jt, double fps, double erp, double* c) const {
+  if (jt.kind == Kind::LMotor) {
+    if (jt.a < 0 || !(jt.lm_fmax > 0.0)) return 0;
+    c[0] = jt.lm_vel;
+    return 1;
+  }
+  const dSurfaceParameters& s = jt.contact.surface;
+  const double e = (s.mode & dContactSoftERP) ? s.soft_erp : erp;
+  double depth = jt.contact.geom.depth - min_depth_;
+  if (depth < 0.0) depth = 0.0;
+  const double motion_n = (s.mode & dContactMotionN) ? s.motionN : 0.0;
+  const double pushout = fps * e * depth + motion_n;
+  c[0] = pushout > max_vel_ ? max_vel_ : pushout;
+  int n = 1;
+  const double mu1 = s.mu < 0.0 ? 0.0 : s.mu;
+  const double mu2 = (s.mode & dContactAxisDep) ? (s.mu2 < 0.0 ? 0.0 : s.mu2) : mu1;
+  if (mu1 > 0.0) c[n++] = (s.mode & dContactMotion1) ? s.motion1 : 0.0;
+  if (mu2 > 0.0) c[n++] = (s.mode & dContactMotion2) ? s.motion2 : 0.0;
+  return n;
 }
 
 bool IslandStep::add_rows(Joint& jt, double fps, double erp) {

@@ -4,7 +4,8 @@
 // world-frame inverse inertias; 2a, the joints' rows (rhs and CFM over h); 2b/2c, A = J M⁻¹ Jᵀ +
 // CFM and rhs = c / h - J (v / h + M⁻¹ f); 3, the solve (here solve_sparse, ode_lcp.hpp); 4, the
 // constraint forces Jᵀ lambda (and the joints' feedback), the velocity update and dxStepBody's
-// integration (ode/src/util.cpp), written back with ODE's setters.
+// integration (ode/src/util.cpp), written back with ODE's setters. resolve(): the same problem
+// again with new targets and forces (island_resolve.cpp: its checks).
 #include <algorithm>
 #include <cmath>
 
@@ -12,99 +13,44 @@
 
 namespace ernest::dynamics::detail {
 
-IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws) {
-  if (!ws.enabled || n_attempt_ > kMaxAttemptJoints || !(h > 0.0)) return Outcome::Unsupported;
-  // Only our joints may act on our bodies (each permanent joint joins two of them), and the
-  // bodies must be plain dynamic ones: dxStepBody's options (finite rotation, speed cap,
-  // damping) and disabled or kinematic bodies are not reproduced.
+// The step's parts, inlined into step() and resolve() (the step's path as one function, as before
+// resolve() shared them).
+#define ERNEST_INLINE __attribute__((always_inline)) inline
+
+// Only our joints may act on our bodies (each permanent joint joins two of them), and the
+// bodies must be plain dynamic ones: dxStepBody's options (finite rotation, speed cap, damping)
+// and disabled or kinematic bodies are not reproduced.
+bool IslandStep::bodies_supported() const {
   int attached = 0;
   for (dBodyID b : body_) {
     if (!dBodyIsEnabled(b) || dBodyIsKinematic(b) || dBodyGetFiniteRotationMode(b) != 0 ||
         dBodyGetMaxAngularSpeed(b) != dInfinity || dBodyGetLinearDamping(b) != 0.0 ||
         dBodyGetAngularDamping(b) != 0.0)
-      return Outcome::Unsupported;
+      return false;
     attached += dBodyGetNumJoints(b);
   }
-  if (attached != 2 * n_permanent_) return Outcome::Unsupported;
-  const double fps = 1.0 / h;  // ODE's dRecip(stepsize)
-  const double erp = dWorldGetERP(world);
-  world_cfm_ = dWorldGetCFM(world);
-  min_depth_ = dWorldGetContactSurfaceLayer(world);
-  max_vel_ = dWorldGetContactMaxCorrectingVel(world);
-  dVector3 gravity;
-  dWorldGetGravity(world, gravity);
+  return attached == 2 * n_permanent_;
+}
 
-  // ---- stage 0: accumulators with gravity and the gyroscopic torque; invI in the world frame
-  for (int i = 0; i < kBodies; ++i) {
-    BodyState& s = bs_[i];
-    const dBodyID b = body_[i];
-    s.pos = dBodyGetPosition(b);
-    s.R = dBodyGetRotation(b);
-    s.q = dBodyGetQuaternion(b);
-    s.lvel = dBodyGetLinearVel(b);
-    s.avel = dBodyGetAngularVel(b);
-    const dReal* f = dBodyGetForce(b);
-    const dReal* t = dBodyGetTorque(b);
-    s.inv_mass = 1.0 / mass_[i];
-    for (int c = 0; c < 3; ++c) {
-      s.facc_g[c] = f[c];
-      s.tacc_g[c] = t[c];
-      if (gravity[c] != 0.0 && dBodyGetGravityMode(b)) s.facc_g[c] += mass_[i] * gravity[c];
-    }
-    dMatrix3 tmp;
-    dMultiply2_333(tmp, inv_inertia_body_[i].data(), s.R);
-    dMultiply0_333(s.invI, s.R, tmp);
-    if (dBodyGetGyroscopicMode(b)) {
-      // Lacoursière's implicit gyroscopic torque, as stage 0: with I and L = I w in the world
-      // frame, tau = (I (I - h [L]x)⁻¹ - 1) L / h
-      dMatrix3 I, itild = {0}, itinv;
-      dMultiply2_333(tmp, inertia_body_[i].data(), s.R);
-      dMultiply0_333(I, s.R, tmp);
-      dVector3 L;
-      dMultiply0_331(L, I, s.avel);
-      dSetCrossMatrixMinus(itild, L, 4);
-      for (int k = 0; k < 12; ++k) itild[k] = itild[k] * h + I[k];
-      dScaleVector3(L, fps);
-      if (dInvertMatrix3(itinv, itild) != 0) {
-        dMultiply0_333(itild, I, itinv);
-        itild[0] -= 1;
-        itild[5] -= 1;
-        itild[10] -= 1;
-        dVector3 tau0;
-        dMultiply0_331(tau0, itild, L);
-        for (int c = 0; c < 3; ++c) s.tacc_g[c] += tau0[c];
-      }
-    }
+// Stage 0's accumulators: the force plus gravity, the torque plus the gyroscopic torque (gyro_,
+// computed by step() from the body's state).
+ERNEST_INLINE void IslandStep::load_forces(int i, const dVector3 gravity) {
+  BodyState& s = bs_[i];
+  const dBodyID b = body_[i];
+  const dReal* f = dBodyGetForce(b);
+  const dReal* t = dBodyGetTorque(b);
+  for (int c = 0; c < 3; ++c) {
+    s.facc_g[c] = f[c];
+    s.tacc_g[c] = t[c];
+    if (gravity[c] != 0.0 && dBodyGetGravityMode(b)) s.facc_g[c] += mass_[i] * gravity[c];
   }
+  if (has_gyro_[i])
+    for (int c = 0; c < 3; ++c) s.tacc_g[c] += gyro_[i][c];
+}
 
-  // ---- stage 2a: the rows, joints ordered as ODE's (purely unbounded joints first: nub rows)
-  m_ = 0;
-  n_order_ = 0;
-  n_body_rows_.fill(0);
-  int nub = 0;
-  for (Kind kind : {Kind::Hinge, Kind::Universal, Kind::AMotor}) {
-    for (int k = 0; k < n_permanent_; ++k) {
-      Joint& jt = permanent_[k];
-      if (jt.kind != kind) continue;
-      if (!add_rows(jt, fps, erp)) return Outcome::Unsupported;
-      if (kind == Kind::Hinge || (kind == Kind::Universal && jt.rows == 4 && nub == jt.first))
-        nub = m_;
-      order_[n_order_++] = &jt;
-    }
-  }
-  for (int k = 0; k < n_attempt_; ++k) {
-    if (!add_rows(attempt_[k], fps, erp)) return Outcome::Unsupported;
-    order_[n_order_++] = &attempt_[k];
-  }
-  const int m = m_;
-  for (int r = 0; r < m; ++r) {
-    // friction bounds tied to a normal force: only the sparse path's Coulomb guesses solve them
-    if (findex_[r] >= 0 && !ws.coulomb_friction) return Outcome::Unsupported;
-    bx_[2 * r] *= fps;
-    cfm_[r] *= fps;
-  }
-
-  // ---- stage 2b/2c: rhs = c / h - J (v / h + M⁻¹ f), and A
+// Stage 2b (and M⁻¹ Jᵀ of each row's sides with kWithJm): bx -= J (v / h + M⁻¹ f) per side.
+template <bool kWithJm>
+ERNEST_INLINE void IslandStep::form_rhs(int m, double fps) {
   std::array<std::array<double, 6>, kBodies> tmp1;
   for (int i = 0; i < kBodies; ++i) {
     const BodyState& s = bs_[i];
@@ -121,23 +67,27 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
       double sum = J[0] * tmp1[bi][0];
       for (int c = 1; c < 6; ++c) sum += J[c] * tmp1[bi][c];
       bx_[2 * r] -= sum;
+      if (!kWithJm) continue;
       // M⁻¹ Jᵀ of this side: J_lin / m, invI J_ang (invI symmetric)
       double* JM = &jm_[r][6 * side];
       for (int c = 0; c < 3; ++c) JM[c] = J[c] * bs_[bi].inv_mass;
       dMultiply0_133(JM + 3, J + 3, bs_[bi].invI);
     }
   }
-  build_a(m, h);
+}
 
-  // ---- stage 3: the solve
-  if (m > 0) {
-    if (!solve_sparse(ws, static_cast<unsigned>(m), a_.data(), bx_.data(), nullptr,
-                      static_cast<unsigned>(nub), lh_.data(), findex_.data()))
-      return Outcome::SolveRefused;
-    ++ws.sparse;
-  }
+// Stage 3: the solve (kept_factor: resolve()'s, see solve_sparse).
+ERNEST_INLINE bool IslandStep::solve(LcpWorkspace& ws, std::uint64_t kept_factor) {
+  if (m_ == 0) return true;
+  if (!solve_sparse(ws, static_cast<unsigned>(m_), a_.data(), bx_.data(), nullptr,
+                    static_cast<unsigned>(kept_nub_), lh_.data(), findex_.data(), kept_factor))
+    return false;
+  ++ws.sparse;
+  return true;
+}
 
-  // ---- stage 4: constraint forces, feedback, velocities and poses
+// Stage 4: constraint forces, feedback, velocities and poses.
+ERNEST_INLINE void IslandStep::apply(double h) {
   for (auto& f : cforce_) f.fill(0.0);
   for (int k = 0; k < n_order_; ++k) {
     const Joint& jt = *order_[k];
@@ -162,7 +112,147 @@ IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws)
     }
   }
   integrate(h);
+}
+
+IslandStep::Outcome IslandStep::step(dWorldID world, double h, LcpWorkspace& ws) {
+  kept_ = false;
+  if (!ws.enabled || n_attempt_ > kMaxAttemptJoints || !(h > 0.0)) return Outcome::Unsupported;
+  if (!bodies_supported()) return Outcome::Unsupported;
+  const double fps = 1.0 / h;  // ODE's dRecip(stepsize)
+  const double erp = dWorldGetERP(world);
+  world_cfm_ = dWorldGetCFM(world);
+  min_depth_ = dWorldGetContactSurfaceLayer(world);
+  max_vel_ = dWorldGetContactMaxCorrectingVel(world);
+  dVector3 gravity;
+  dWorldGetGravity(world, gravity);
+
+  // ---- stage 0: accumulators with gravity and the gyroscopic torque; invI in the world frame
+  for (int i = 0; i < kBodies; ++i) {
+    BodyState& s = bs_[i];
+    const dBodyID b = body_[i];
+    s.pos = dBodyGetPosition(b);
+    s.R = dBodyGetRotation(b);
+    s.q = dBodyGetQuaternion(b);
+    s.lvel = dBodyGetLinearVel(b);
+    s.avel = dBodyGetAngularVel(b);
+    s.inv_mass = 1.0 / mass_[i];
+    double* kept = kept_state_[i].data();  // (resolve() compares the state it starts from)
+    for (int c = 0; c < 3; ++c) {  // (element by element: std::copy calls memmove per range)
+      kept[c] = s.pos[c];
+      kept[19 + c] = s.lvel[c];
+      kept[22 + c] = s.avel[c];
+    }
+    for (int c = 0; c < 4; ++c) kept[3 + c] = s.q[c];
+    for (int c = 0; c < 12; ++c) kept[7 + c] = s.R[c];
+    dMatrix3 tmp;
+    dMultiply2_333(tmp, inv_inertia_body_[i].data(), s.R);
+    dMultiply0_333(s.invI, s.R, tmp);
+    has_gyro_[i] = false;
+    if (dBodyGetGyroscopicMode(b)) {
+      // Lacoursière's implicit gyroscopic torque, as stage 0: with I and L = I w in the world
+      // frame, tau = (I (I - h [L]x)⁻¹ - 1) L / h
+      dMatrix3 I, itild = {0}, itinv;
+      dMultiply2_333(tmp, inertia_body_[i].data(), s.R);
+      dMultiply0_333(I, s.R, tmp);
+      dVector3 L;
+      dMultiply0_331(L, I, s.avel);
+      dSetCrossMatrixMinus(itild, L, 4);
+      for (int k = 0; k < 12; ++k) itild[k] = itild[k] * h + I[k];
+      dScaleVector3(L, fps);
+      if (dInvertMatrix3(itinv, itild) != 0) {
+        dMultiply0_333(itild, I, itinv);
+        itild[0] -= 1;
+        itild[5] -= 1;
+        itild[10] -= 1;
+        dVector3 tau0;
+        dMultiply0_331(tau0, itild, L);
+        for (int c = 0; c < 3; ++c) gyro_[i][c] = tau0[c];
+        has_gyro_[i] = true;
+      }
+    }
+    load_forces(i, gravity);
+  }
+
+  // ---- stage 2a: the rows, joints ordered as ODE's (purely unbounded joints first: nub rows)
+  m_ = 0;
+  n_order_ = 0;
+  n_body_rows_.fill(0);
+  int nub = 0;
+  for (Kind kind : {Kind::Hinge, Kind::Universal, Kind::AMotor}) {
+    for (int k = 0; k < n_permanent_; ++k) {
+      Joint& jt = permanent_[k];
+      if (jt.kind != kind) continue;
+      if (!add_rows(jt, fps, erp)) return Outcome::Unsupported;
+      if (kind == Kind::Hinge || (kind == Kind::Universal && jt.rows == 4 && nub == jt.first))
+        nub = m_;
+      order_[n_order_++] = &jt;
+    }
+  }
+  n_permanent_order_ = n_order_;
+  for (int k = 0; k < n_attempt_; ++k) {
+    if (!add_rows(buffer(cur_)[k], fps, erp)) return Outcome::Unsupported;
+    order_[n_order_++] = &buffer(cur_)[k];
+  }
+  const int m = m_;
+  for (int r = 0; r < m; ++r) {
+    // friction bounds tied to a normal force: only the sparse path's Coulomb guesses solve them
+    if (findex_[r] >= 0 && !ws.coulomb_friction) return Outcome::Unsupported;
+    c_[r] = bx_[2 * r];
+    bx_[2 * r] *= fps;
+    cfm_[r] *= fps;
+  }
+
+  // ---- stage 2b/2c: rhs = c / h - J (v / h + M⁻¹ f), and A
+  form_rhs<true>(m, fps);
+  build_a(m, h);
+  kept_nub_ = nub;
+  if (!solve(ws, 0)) return Outcome::SolveRefused;
+  apply(h);
+  // What resolve() needs to tell the same problem and to solve it again.
+  kept_ = true;
+  kept_buf_ = cur_;
+  kept_n_attempt_ = n_attempt_;
+  kept_factor_ = ws.factors;
+  kept_h_ = h;
+  kept_erp_ = erp;
+  for (int c = 0; c < 3; ++c) kept_gravity_[c] = gravity[c];
   return Outcome::Stepped;
+}
+
+// The kept step's problem again with the new targets and forces: stage 0's accumulators, the
+// rows' right-hand sides (the kept c / h but for the attempt's targets), stage 2b without
+// M⁻¹ Jᵀ, the solve with the kept factor, stage 4. Each value is computed as step() computes it,
+// from the same inputs: the same bits.
+IslandStep::Outcome IslandStep::resolve(dWorldID world, double h, LcpWorkspace& ws) {
+  const Match match = same_problem(world, h, ws);
+  if (match == Match::Different) return step(world, h, ws);
+  const double fps = 1.0 / h;
+  const dVector3 gravity = {kept_gravity_[0], kept_gravity_[1], kept_gravity_[2], 0.0};
+  for (int i = 0; i < kBodies; ++i) load_forces(i, gravity);
+  for (int r = 0; r < m_; ++r) bx_[2 * r] = c_[r];
+  const Joint* before = buffer(kept_buf_);
+  for (int k = 0; k < n_attempt_; ++k) {
+    Joint& jt = buffer(cur_)[k];
+    const Joint& y = before[k];
+    jt.first = y.first;
+    jt.rows = y.rows;
+    jt.row_a = y.row_a;
+    jt.row_b = y.row_b;
+    order_[n_permanent_order_ + k] = &jt;
+    double c[3];
+    const int n = std::min(attempt_targets(jt, fps, kept_erp_, c), jt.rows);
+    for (int q = 0; q < n; ++q) bx_[2 * (jt.first + q)] = c_[jt.first + q] = c[q];
+    if (match == Match::Caps) attempt_caps(jt, fps);
+  }
+  for (int r = 0; r < m_; ++r) bx_[2 * r] *= fps;
+  form_rhs<false>(m_, fps);
+  kept_ = false;
+  if (!solve(ws, match == Match::Same ? kept_factor_ : 0)) return Outcome::SolveRefused;
+  apply(h);
+  kept_ = true;
+  kept_buf_ = cur_;
+  kept_factor_ = ws.factors;  // (a guess flipped in the solve factorised the same A again)
+  return match == Match::Same ? Outcome::Resolved : Outcome::ResolvedCaps;
 }
 
 // A's lower triangle (row stride dPAD(m), ODE's layout for the solver), body by body: the rows
@@ -178,6 +268,7 @@ void IslandStep::build_a(int m, double h) {
     double* row = &a_[static_cast<std::size_t>(r) * stride];
     std::fill(row, row + std::min(r + 2, stride), 0.0);
     row[r] = cfm_[r];
+    n_diag_[r] = 0;
   }
   std::array<int, kMaxRows> rows;
   std::array<double, kMaxRows> dot;
@@ -198,6 +289,7 @@ void IslandStep::build_a(int m, double h) {
         dot[q] = ((m0 * j0[q] + m1 * j1[q]) + (m2 * j2[q] + m3 * j3[q])) + (m4 * j4[q] + m5 * j5[q]);
       double* arow = &a_[static_cast<std::size_t>(rows[p]) * stride];
       for (int q = 0; q <= p; ++q) arow[rows[q]] += dot[q];
+      diag_[rows[p]][n_diag_[rows[p]]++] = dot[p];  // (resolve() adds them to a new CFM)
     }
   }
 }
@@ -229,5 +321,7 @@ void IslandStep::integrate(double h) {
     dBodySetTorque(b, 0, 0, 0);
   }
 }
+
+#undef ERNEST_INLINE
 
 }  // namespace ernest::dynamics::detail

@@ -43,8 +43,15 @@ class IslandStep {
   void add_universal(dJointID j);
   void add_amotor(dJointID j);
 
-  /// This attempt's own joints: recorded here instead of created in ODE (clear: none).
-  void clear_attempt() { n_attempt_ = 0; }
+  /// This attempt's own joints: recorded here instead of created in ODE (clear: none). While
+  /// resolve() may follow, the other of two buffers: the stepped attempt's joints stay to compare.
+  void clear_attempt() {
+    if (kept_) {
+      if (cur_ == kept_buf_) cur_ ^= 1;
+      else kept_ = false;  // a second attempt recorded since the kept one
+    }
+    n_attempt_ = 0;
+  }
   /// A contact as dJointCreateContact + dJointAttach(b1, b2) + dJointSetFeedback(fb) would make.
   void add_contact(const dContact& c, dBodyID b1, dBodyID b2, dJointFeedback* fb);
   /// A one-axis linear motor (axis global, rel 0) on body b alone, as dJointCreateLMotor with
@@ -56,8 +63,25 @@ class IslandStep {
   /// One step of length h of the island. Anything but Stepped: nothing in ODE changed, and
   /// dWorldStep must take the step (after materialise()); SolveRefused: solve_sparse was tried
   /// on this very problem and refused it (ODE's Dantzig solver must solve it).
-  enum class Outcome { Stepped, Unsupported, SolveRefused };
+  /// Resolved: resolve() took the last step's rows and factor; ResolvedCaps: its rows with new
+  /// bounds and CFMs (A's diagonal), factorised again.
+  enum class Outcome { Stepped, Resolved, ResolvedCaps, Unsupported, SolveRefused };
   Outcome step(dWorldID world, double h, LcpWorkspace& ws);
+  /// Another attempt at the last step()'s problem, which differs from it only in the attempt's
+  /// targets (contacts' motion velocities, linear motors' speeds) and the forces on the bodies:
+  /// the implicit slip's re-solves that only move the soil rows' levels (rover_step.cpp). Then
+  /// J, A and the rows stay, and only the right-hand side is formed again (ODE's rhs = c / h -
+  /// J (v / h + M⁻¹ f_ext)) and solved with the kept LDLᵀ factor: the bits step() would give.
+  /// Checked: the bodies' state (bit for bit, as restored), the world's parameters, h, the
+  /// attempt's joints but for their targets, and that the workspace still holds the factor.
+  /// Where only the attempt's caps changed too (contacts' mu and slip, linear motors' fmax and
+  /// CFM: the rows' bounds and A's diagonal), the rows, J and A off the diagonal stay, the
+  /// diagonal is summed again as build_a sums it, and A is factorised (ResolvedCaps).
+  /// Not checked (the caller's part): the permanent joints' parameters are those of the last
+  /// step(); forget() when they change. Anything else is a step().
+  Outcome resolve(dWorldID world, double h, LcpWorkspace& ws);
+  /// The permanent joints' parameters may have changed: the next resolve() is a step().
+  void forget() { kept_ = false; }
 
  private:
   enum class Kind : std::int8_t { Hinge, Universal, AMotor, Contact, LMotor };
@@ -80,6 +104,16 @@ class IslandStep {
     double inv_mass;
   };
   int body_index(dBodyID b) const;
+  bool bodies_supported() const;
+  void load_forces(int i, const dVector3 gravity);
+  template <bool kWithJm>
+  void form_rhs(int m, double fps);
+  bool solve(LcpWorkspace& ws, std::uint64_t kept_factor);
+  void apply(double h);
+  enum class Match { Different, Caps, Same };
+  Match same_problem(dWorldID world, double h, const LcpWorkspace& ws);
+  void attempt_caps(const Joint& jt, double fps);
+  int attempt_targets(const Joint& jt, double fps, double erp, double* c) const;
   Joint& add_permanent(dJointID j, Kind kind);
   bool add_rows(Joint& jt, double fps, double erp);
   bool hinge_rows(Joint& jt, double fps, double erp);
@@ -117,7 +151,10 @@ class IslandStep {
   std::array<std::array<dReal, 12>, kBodies> inertia_body_{};
   std::array<Joint, 16> permanent_{};
   int n_permanent_ = 0;
-  std::array<Joint, kMaxAttemptJoints> attempt_{};
+  std::array<Joint, kMaxAttemptJoints> attempt_{};  // buffer 0 (clear_attempt; 1: attempt2_)
+  int cur_ = 0;  // this attempt's buffer
+  Joint* buffer(int i) { return i == 0 ? attempt_.data() : attempt2_.data(); }
+  const Joint* buffer(int i) const { return i == 0 ? attempt_.data() : attempt2_.data(); }
   int n_attempt_ = 0;
 
   // ---- this step's working data (preallocated)
@@ -141,6 +178,22 @@ class IslandStep {
   std::array<std::array<double, kMaxRows>, 6> jb_{};
   std::array<int, kMaxRows> side_{};
   std::array<std::array<double, 6>, kBodies> cforce_{};
+
+  // ---- what resolve() keeps of the last step() (valid while kept_). Last: the step's working
+  // data above keeps the offsets it had before (a time profile of flat ground's step moved by
+  // ~2 % in code that did not change when they moved).
+  std::array<Joint, kMaxAttemptJoints> attempt2_{};  // the other attempt buffer
+  bool kept_ = false;
+  int kept_buf_ = -1, kept_n_attempt_ = 0, kept_nub_ = 0, n_permanent_order_ = 0;
+  std::uint64_t kept_factor_ = 0;  // LcpWorkspace::factors after the solve
+  double kept_h_ = 0.0, kept_erp_ = 0.0;
+  std::array<double, 3> kept_gravity_{};
+  std::array<std::array<double, 25>, kBodies> kept_state_{};  // pos, q, R (3x4), v, w: bits
+  std::array<std::array<double, 3>, kBodies> gyro_{};  // stage 0's gyroscopic torque
+  std::array<bool, kBodies> has_gyro_{};
+  std::array<double, kMaxRows> c_{};  // the rows' right-hand sides before stage 2a's 1 / h
+  std::array<std::array<double, 2>, kMaxRows> diag_{};  // each body's product on A's diagonal
+  std::array<int, kMaxRows> n_diag_{};
 };
 
 }  // namespace ernest::dynamics::detail

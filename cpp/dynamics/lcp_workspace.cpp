@@ -54,6 +54,8 @@ void LcpWorkspace::clear() {
   next_plan = 0;
   guesses = {};
   next_guess = 0;
+  ++factors;  // (ldlt's factor may refer to a plan that goes)
+  factored_n = 0;
 }
 
 // Layout: next_plan, then per slot n (0: not remembered; only after the remembered ones),

@@ -132,7 +132,8 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
 // (I + G) x_K = y_K first. Checked as Dantzig's method ends: at +bound w_i <= 0, at -bound
 // w_i >= 0.
 bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx, double* outer_w,
-                  unsigned nub, const double* pairslh, const int* findex) {
+                  unsigned nub, const double* pairslh, const int* findex,
+                  std::uint64_t kept_factor) {
   using Mask = LdltPlan::Mask;
   constexpr int kMax = LdltPlan::kMaxRows;
   if (n > static_cast<unsigned>(kMax) || n == 0) return false;  // (row masks of kMax bits)
@@ -171,7 +172,12 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
       rows[nf++] = static_cast<unsigned>(__builtin_ctzll(m));
     for (auto m = static_cast<std::uint64_t>(solved >> 64); m; m &= m - 1)
       rows[nf++] = 64u + static_cast<unsigned>(__builtin_ctzll(m));
-    if (nf > 0) {
+    const bool kept = kept_factor != 0 && kept_factor == ws.factors && n == ws.factored_n &&
+                      solved == ws.factored;  // the factor of these rows of this A is in ldlt
+    if (nf > 0 && kept) {
+      for (int a = 0; a < nf; ++a) x[a] = pairsbx[2 * rows[a]];
+      ws.ldlt.solve(x.data());
+    } else if (nf > 0) {
       // A remembered plan for these rows serves if A has no non-zero outside its factor;
       // otherwise A's pattern (each solved row's non-zeros left of the diagonal, two at a time,
       // the other rows' columns dropped) makes or grows one.
@@ -197,7 +203,13 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
         }
         plan = &ws.adopt(known, pattern.data(), rows.data(), nf, static_cast<int>(stride));
       }
-      if (!ws.ldlt.factor(*plan, A)) return false;
+      ++ws.factors;
+      ws.factored = solved;
+      ws.factored_n = n;
+      if (!ws.ldlt.factor(*plan, A)) {
+        ws.factored_n = 0;
+        return false;
+      }
       for (int a = 0; a < nf; ++a) x[a] = pairsbx[2 * rows[a]];
       ws.ldlt.solve(x.data());
     }

@@ -76,6 +76,11 @@ struct LcpWorkspace {
   std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> a_copy{};
   std::array<double, 2 * LdltPlan::kMaxRows> bx_copy{}, lh_copy{};
   std::array<int, LdltPlan::kMaxRows> findex_copy{};
+  /// Factorisations made in ldlt (a serial: 0 none yet; clear() counts one, its plans go), and
+  /// the last one's rows and problem size: what solve_sparse's kept_factor refers to.
+  std::uint64_t factors = 0;
+  LdltPlan::Mask factored = 0;
+  unsigned factored_n = 0;
 
   /// The remembered plan for these rows, or nullptr.
   LdltPlan* find(const unsigned* rows, int n, int stride);
@@ -98,8 +103,12 @@ struct LcpWorkspace {
 /// Dantzig's method ends (ode_lcp.cpp). Returns false, the outputs untouched, if it cannot (then
 /// ODE's Dantzig solver must). Called by the hook below, and directly by our own island step
 /// (island_step.hpp). Does not count the solve (LcpWorkspace::sparse): the caller does.
+/// kept_factor: ws.factors after an earlier call with this very A (bit for bit; IslandStep::
+/// resolve); while no factorisation happened since, a guess that solves the rows of that call's
+/// last factor uses it as it is (the same bits as factorising A again). 0: none.
 bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx, double* outer_w,
-                  unsigned nub, const double* pairslh, const int* findex);
+                  unsigned nub, const double* pairslh, const int* findex,
+                  std::uint64_t kept_factor = 0);
 
 /// While alive, dWorldStep calls on this thread solve through `ws` (not nested).
 class LcpScope {

@@ -141,6 +141,14 @@ struct SimOptions {
   /// start offsets 1.38 m at dt, 1.52 m at dt/8), where Ode's two outcomes do not
   /// (benchmarks/RESULTS.md, "Session 12: wheel-rock contact").
   WheelObstacleContact wheel_obstacle_contact = WheelObstacleContact::Ode;
+  /// With the Own stepper: a re-solve of a step whose rows are the last attempt's (the implicit
+  /// slip's solves that only move the soil rows' levels, rover_step.cpp: only the normal rows'
+  /// targets and the explicit torques change) keeps that attempt's rows, A and LDLᵀ factor and
+  /// solves a new right-hand side (cpp/dynamics/island_step.hpp, IslandStep::resolve); one whose
+  /// slips moved the soil rows' caps keeps the rows, J and A but for its diagonal (the caps'
+  /// CFMs) and factorises again. The same bits either way (SolverStats::rhs_resolves and
+  /// cap_resolves count them); false rebuilds every attempt (tests, comparisons).
+  bool resolve_rhs_only = true;
   double max_speed = 50.0;          ///< divergence: any body faster than this [m/s]
   double max_angular_speed = 500.0; ///< divergence: any body spinning faster [rad/s]
   void validate() const;
@@ -249,6 +257,12 @@ struct SolverStats {
   /// refused: then ODE's Dantzig solver).
   std::uint64_t own_steps = 0;
   std::uint64_t own_fallbacks = 0;
+  /// Of the own steps, those solved as a new right-hand side of the last attempt's rows and
+  /// factor (SimOptions::resolve_rhs_only).
+  std::uint64_t rhs_resolves = 0;
+  /// Of the own steps, those that kept the last attempt's rows (J, A but for its diagonal) with
+  /// new bounds and CFMs (a slip re-solve that moved the soil rows' caps), factorised again.
+  std::uint64_t cap_resolves = 0;
   /// Sparse solves' symbolic analyses (LdltPlan::analyse): plans made for row sets not
   /// remembered, and remembered plans analysed again grown by a pattern outside their factor.
   std::uint64_t plans_made = 0;

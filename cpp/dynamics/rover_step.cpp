@@ -246,9 +246,13 @@ void RoverSim::Impl::world_step() {
     dWorldStep(world, h);
     return;
   }
-  const detail::IslandStep::Outcome r = island.step(world, h, lcp);
-  if (r == detail::IslandStep::Outcome::Stepped) {
+  const detail::IslandStep::Outcome r =
+      opt.resolve_rhs_only ? island.resolve(world, h, lcp) : island.step(world, h, lcp);
+  using Outcome = detail::IslandStep::Outcome;
+  if (r == Outcome::Stepped || r == Outcome::Resolved || r == Outcome::ResolvedCaps) {
     ++stats.own_steps;
+    if (r == Outcome::Resolved) ++stats.rhs_resolves;
+    if (r == Outcome::ResolvedCaps) ++stats.cap_resolves;
     return;
   }
   ++stats.own_fallbacks;
@@ -263,6 +267,7 @@ void RoverSim::Impl::step_once() {
   if (diverged)
     throw SimulationDiverged("RoverSim: the simulation diverged earlier; restore() or reset() first");
   init_ode_once();
+  island.forget();  // a new step: the joints' parameters change (stops, drives), resolve() may not
   double psi = start_psi, phi = start_phi;
   if (!start_current) {  // the bodies changed since read_outputs() (restore)
     double psid, phid;
@@ -311,7 +316,13 @@ void RoverSim::Impl::step_once() {
   // couples them: Broyden's method on the four slips from J = -I (the first update is the
   // fixed-point step, eq 12 at the end), clamped to [-1, 1], from the first guesses of
   // warm_start_levels / warm_start_slips. After kMaxSlipSolves solves the step is solved once
-  // more at the best slips seen.
+  // more at the best slips seen. Once every solved slip agrees with eq 12 to kSlipTolerance, only
+  // the levels are off (the acceptance test already ignores such a slip error): sigma is then
+  // kept and the levels alone iterated. Broyden would still move sigma a little, and with it the
+  // soil rows' caps and force-dependent CFMs; kept, the re-solve is the last attempt's system
+  // with a new right-hand side (the normal rows' targets, the explicit torques), which the island
+  // step solves with the last attempt's rows and factor (IslandStep::resolve). A slip that
+  // drifts past kSlipTolerance as the levels move brings Broyden back.
   // Backward Euler is right where the slip damps the motion (the stalled wheel above: a larger
   // slip gives a smaller end slip), not where it drives it. A wheel spinning against an obstacle
   // face on soil stands at v_x ~ 0, where eq 12's factor (1 - exp(-eps v_x^2)) makes the slip, and
@@ -381,6 +392,9 @@ void RoverSim::Impl::step_once() {
       continue;
     }
     if (worst <= opt.slip_force_tolerance) break;
+    bool converged = true;  // every solved slip agrees with eq 12 to kSlipTolerance
+    for (int i = 0; i < 4; ++i)
+      converged = converged && (!ground[i].active || driving[i] || std::abs(res[i]) <= kSlipTolerance);
     if (worst < best) {
       best = worst;
       best_sigma = sigma;
@@ -390,6 +404,11 @@ void RoverSim::Impl::step_once() {
       continue;
     }
     if (solve == kMaxSlipSolves) break;
+    if (converged) {  // only the levels moved: keep sigma (see above), so the rows stay the same
+      prev_sigma = sigma;
+      prev_res = res;
+      continue;
+    }
     if (solve > 0) {  // Broyden's rank-one update with the last change of sigma
       const Eigen::Vector4d ds = sigma - prev_sigma, dr = res - prev_res;
       const double n2 = ds.squaredNorm();

@@ -134,6 +134,7 @@ class SimOptions:
     sparse_lcp: bool
     stepper: Stepper
     wheel_obstacle_contact: WheelObstacleContact
+    resolve_rhs_only: bool
     max_speed: float
     max_angular_speed: float
     slip_force_tolerance: float
@@ -158,6 +159,8 @@ class SolverStats:
     obstacle_implicit: int
     own_steps: int
     own_fallbacks: int
+    rhs_resolves: int
+    cap_resolves: int
     plans_made: int
     plans_grown: int
     obstacles_touched: int

@@ -10,6 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <iterator>
 #include <vector>
 
 #include "ernest/dynamics/rover_sim.hpp"
@@ -210,4 +213,86 @@ TEST(IslandStep, SameSeedSameBitsAndRestoreIsExact) {
   a.restore(mid);
   a.step_n(40);
   EXPECT_EQ(body_gap(a.snapshot(), end), 0.0);
+}
+
+namespace {
+
+// Step k's commands for the resolve test: every drive moves, the clutch engages and releases and
+// the AGS is switched off for a while, so drive rows change their modes (and the drives' joint
+// parameters change) between the attempts of some steps.
+Commands varied(int k) {
+  Commands c;
+  for (int w = 0; w < 4; ++w) c.wheel_speed[w] = 1.2 + 0.4 * std::sin(0.05 * k + 0.7 * w);
+  c.yaw_rate = 0.3 * std::sin(0.03 * k);
+  c.roll_rate = 0.1 * std::cos(0.04 * k);
+  c.clutch_engage = (k / 70) % 2 == 1;
+  c.gimbal_enabled = !(k >= 150 && k < 190);
+  return c;
+}
+
+// The same run with SimOptions::resolve_rhs_only on and off: every step's state vector (drive
+// torques, loads, FTS wrenches) and bodies to the bit, and the same SolverStats but for the
+// counts of resolves (right-hand sides, and new caps). Returns the rhs resolves with it on.
+std::uint64_t resolves_give_the_bits_of_rebuilds(const HeightMap& hm,
+                                                 const std::vector<BoxObstacle>& obstacles,
+                                                 int steps, double x0) {
+  SimOptions on = options(Stepper::Own), off = on;
+  off.resolve_rhs_only = false;
+  EXPECT_TRUE(on.resolve_rhs_only);  // the default
+  RoverSim a(RoverParameters{}, hm, obstacles, on), b(RoverParameters{}, hm, obstacles, off);
+  a.reset(x0, 0, 0, 0, 0, 0.15);
+  b.reset(x0, 0, 0, 0, 0, 0.15);
+  int touching = 0;
+  std::vector<double> va(RoverSim::kStateVectorSize), vb(RoverSim::kStateVectorSize);
+  int first_difference = -1;
+  for (int k = 0; k < steps && first_difference < 0; ++k) {
+    a.set_commands(varied(k));
+    b.set_commands(varied(k));
+    a.step();
+    b.step();
+    a.state_vector(va.data());
+    b.state_vector(vb.data());
+    const Snapshot sa = a.snapshot(), sb = b.snapshot();
+    bool same = std::memcmp(va.data(), vb.data(), va.size() * sizeof(double)) == 0;
+    for (std::size_t i = 0; i < sa.bodies.size(); ++i) {
+      const Snapshot::Body &x = sa.bodies[i], &y = sb.bodies[i];
+      same = same && std::memcmp(x.pos.data(), y.pos.data(), sizeof(double) * 3) == 0 &&
+             std::memcmp(x.lin.data(), y.lin.data(), sizeof(double) * 3) == 0 &&
+             std::memcmp(x.ang.data(), y.ang.data(), sizeof(double) * 3) == 0 &&
+             std::memcmp(x.quat.data(), y.quat.data(), sizeof(double) * 4) == 0;
+    }
+    if (!same) first_difference = k;
+    touching += a.solver_stats().obstacles_touched > 0;
+  }
+  EXPECT_EQ(first_difference, -1) << "the runs parted at this step";
+  const SolverStats &x = a.solver_stats(), &y = b.solver_stats();
+  const std::uint64_t fa[] = {x.steps, x.first_guess, x.later_guess, x.pivoted, x.lcp_errors,
+                              x.sparse_solves, x.dense_solves, x.slip_solves, x.slip_driving,
+                              x.obstacle_guessed, x.obstacle_bounded, x.obstacle_explicit,
+                              x.obstacle_implicit, x.own_steps, x.own_fallbacks, x.plans_made,
+                              x.plans_grown};
+  const std::uint64_t fb[] = {y.steps, y.first_guess, y.later_guess, y.pivoted, y.lcp_errors,
+                              y.sparse_solves, y.dense_solves, y.slip_solves, y.slip_driving,
+                              y.obstacle_guessed, y.obstacle_bounded, y.obstacle_explicit,
+                              y.obstacle_implicit, y.own_steps, y.own_fallbacks, y.plans_made,
+                              y.plans_grown};
+  for (std::size_t i = 0; i < std::size(fa); ++i) EXPECT_EQ(fa[i], fb[i]) << "SolverStats field " << i;
+  EXPECT_EQ(y.rhs_resolves, 0u);
+  EXPECT_EQ(y.cap_resolves, 0u);
+  EXPECT_LT(x.rhs_resolves + x.cap_resolves, x.own_steps);
+  EXPECT_GT(x.cap_resolves, 0u) << "slip re-solves that moved the caps must take the caps path";
+  EXPECT_GE(touching, obstacles.empty() ? 0 : 100) << "the rocks must be touched";
+  return x.rhs_resolves;
+}
+
+}  // namespace
+
+TEST(IslandStep, RightHandSideResolvesGiveTheBitsOfRebuilds) {
+  // Rocks in both tracks (obstacle contacts with friction rows, impacts: most level-only
+  // re-solves), and a 12 deg slope of M90 where the wheels slip.
+  const std::uint64_t rocks_resolves =
+      resolves_give_the_bits_of_rebuilds(HeightMap::flat(12, 8, 0.25, 0, -4, -4), rocks(), 400, 0.4);
+  EXPECT_GE(rocks_resolves, 20u) << "the rocks must make level-only re-solves";
+  resolves_give_the_bits_of_rebuilds(HeightMap::slope(12.0 * M_PI / 180.0, 16, 8, 0.25, -6, -4),
+                                     {}, 300, 0.0);
 }

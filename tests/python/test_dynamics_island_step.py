@@ -6,9 +6,10 @@ import numpy as np
 from ernest_cpp import dynamics as D
 
 
-def _run(stepper, steps: int = 320):
+def _run(stepper, steps: int = 320, resolve_rhs_only: bool = True):
     o = D.make_options("soil", friction=0.8)
     o.stepper = stepper
+    o.resolve_rhs_only = resolve_rhs_only
     rock = [D.BoxObstacle(np.array([0.85, 0.4, 0.0]), np.array([0.1, 0.12, 0.08]), 0.4, 0.0, 0.0)]
     sim = D.make_sim(obstacles=rock, options=o)
     sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.15)
@@ -48,3 +49,16 @@ def test_solver_stats_count_the_sparse_solves_plans():
         assert 1 <= s.plans_made <= s.sparse_solves, stepper
         assert 0 <= s.plans_grown <= 3 * s.sparse_solves, stepper
         assert f"plans_made={s.plans_made}, plans_grown={s.plans_grown}" in repr(s)
+
+
+def test_right_hand_side_resolves_give_the_same_bits():
+    # SimOptions.resolve_rhs_only (default on): the implicit slip's level-only re-solves take the
+    # last attempt's rows and factor (IslandStep::resolve); the same run bit for bit when off.
+    assert D.SimOptions().resolve_rhs_only is True
+    on, off = _run(D.Stepper.Own), _run(D.Stepper.Own, resolve_rhs_only=False)
+    son, soff = on.solver_stats, off.solver_stats
+    assert 0 < son.rhs_resolves < son.own_steps and soff.rhs_resolves == 0
+    assert son.cap_resolves >= 0 and soff.cap_resolves == 0
+    assert f"rhs_resolves={son.rhs_resolves}, cap_resolves={son.cap_resolves}" in repr(son)
+    assert son.own_steps == soff.own_steps and son.slip_solves == soff.slip_solves
+    np.testing.assert_array_equal(on.state_vector(), off.state_vector())
