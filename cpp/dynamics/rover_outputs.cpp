@@ -121,24 +121,23 @@ void RoverSim::Impl::check_divergence() {
   for (int b = 0; b < 6; ++b) {
     const Vec3 x = pos(b), v = to_vec(dBodyGetLinearVel(body[b])),
                w = to_vec(dBodyGetAngularVel(body[b]));
-    std::string what;
-    if (!x.allFinite() || !v.allFinite() || !w.allFinite()) {
-      what = "non-finite state";
-    } else if (v.squaredNorm() > opt.max_speed * opt.max_speed) {
-      what = "speed " + std::to_string(v.norm()) + " m/s > max_speed " + std::to_string(opt.max_speed);
-    } else if (w.squaredNorm() > opt.max_angular_speed * opt.max_angular_speed) {
-      what = "angular speed " + std::to_string(w.norm()) + " rad/s > max_angular_speed " +
-             std::to_string(opt.max_angular_speed);
-    } else if (x.squaredNorm() > 1e12) {
-      what = "position beyond 1e6 m";
-    }
-    if (!what.empty()) {
-      diverged = true;
-      std::ostringstream os;
-      os << "SimulationDiverged at t = " << st.time << " s: " << kBodyNames[b] << " " << what
-         << " (dt = " << opt.dt << " s); restore a snapshot or reset";
-      throw SimulationDiverged(os.str());
-    }
+    const bool finite = x.allFinite() && v.allFinite() && w.allFinite();
+    const bool fast = finite && v.squaredNorm() > opt.max_speed * opt.max_speed;
+    const bool spinning = finite && w.squaredNorm() > opt.max_angular_speed * opt.max_angular_speed;
+    const bool far = finite && x.squaredNorm() > 1e12;
+    if (finite && !fast && !spinning && !far) continue;  // (the message only when it is thrown)
+    const std::string what =
+        !finite ? "non-finite state"
+        : fast  ? "speed " + std::to_string(v.norm()) + " m/s > max_speed " +
+                     std::to_string(opt.max_speed)
+        : spinning ? "angular speed " + std::to_string(w.norm()) + " rad/s > max_angular_speed " +
+                         std::to_string(opt.max_angular_speed)
+                   : "position beyond 1e6 m";
+    diverged = true;
+    std::ostringstream os;
+    os << "SimulationDiverged at t = " << st.time << " s: " << kBodyNames[b] << " " << what
+       << " (dt = " << opt.dt << " s); restore a snapshot or reset";
+    throw SimulationDiverged(os.str());
   }
 }
 
