@@ -149,13 +149,14 @@ class Mujoco:
         geom pair) seen, to check the like-for-like claims (4 and 1 for our wheel shape)."""
         self.reset()
         m, d = self.model, self.data
+        plane = self.mj.mj_name2id(m, self.mj.mjtObj.mjOBJ_GEOM, "ground")
         ground, per_pair = 0, 0
         for _ in range(steps):
             self.mj.mj_step(m, d)
             pairs = {}
             for c in d.contact[:d.ncon]:
                 pairs[(c.geom1, c.geom2)] = pairs.get((c.geom1, c.geom2), 0) + 1
-            ground = max(ground, sum(1 for c in d.contact[:d.ncon] if 0 in (c.geom1, c.geom2)))
+            ground = max(ground, sum(1 for c in d.contact[:d.ncon] if plane in (c.geom1, c.geom2)))
             per_pair = max([per_pair] + list(pairs.values()))
         return ground, per_pair
 
