@@ -48,6 +48,7 @@ void IslandStep::bind(const std::array<dBodyID, kBodies>& bodies) {
   n_permanent_ = 0;
   n_attempt_ = 0;
   kept_ = false;
+  bodies_checked_ = false;
 }
 
 int IslandStep::body_index(dBodyID b) const {
@@ -61,6 +62,7 @@ IslandStep::Joint& IslandStep::add_permanent(dJointID j, Kind kind) {
   if (n_permanent_ >= static_cast<int>(permanent_.size()))
     throw std::length_error("IslandStep: more permanent joints than it holds");
   Joint& jt = permanent_[n_permanent_++];
+  bodies_checked_ = false;
   jt = Joint{};
   jt.kind = kind;
   jt.id = j;
@@ -112,6 +114,7 @@ void IslandStep::add_lmotor(dBodyID b, const double axis[3], double vel, double 
 }
 
 void IslandStep::materialise(dWorldID world, dJointGroupID group) const {
+  bodies_checked_ = false;  // joints attached to the bodies (until the group is emptied)
   const int n = std::min(n_attempt_, kMaxAttemptJoints);
   for (int k = 0; k < n; ++k) {
     const Joint& jt = buffer(cur_)[k];

@@ -82,6 +82,9 @@ class IslandStep {
   Outcome resolve(dWorldID world, double h, LcpWorkspace& ws);
   /// The permanent joints' parameters may have changed: the next resolve() is a step().
   void forget() { kept_ = false; }
+  /// Whether the last step() or resolve() that stepped the bodies left every body's quaternion
+  /// at a fixed point of ODE's normalisation (ode_quaternion.hpp): nothing to canonicalise.
+  bool quaternions_fixed() const { return quaternions_fixed_; }
 
  private:
   enum class Kind : std::int8_t { Hinge, Universal, AMotor, Contact, LMotor };
@@ -184,6 +187,8 @@ class IslandStep {
   // ~2 % in code that did not change when they moved).
   std::array<Joint, kMaxAttemptJoints> attempt2_{};  // the other attempt buffer
   bool kept_ = false;
+  mutable bool bodies_checked_ = false;  // bodies_supported() said yes since the last change
+  bool quaternions_fixed_ = false;       // quaternions_fixed()
   int kept_buf_ = -1, kept_n_attempt_ = 0, kept_nub_ = 0, n_permanent_order_ = 0;
   std::uint64_t kept_factor_ = 0;  // LcpWorkspace::factors after the solve
   double kept_h_ = 0.0, kept_erp_ = 0.0;

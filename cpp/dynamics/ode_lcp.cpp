@@ -74,6 +74,7 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
   std::array<int, kMax> kpos, normal_of;
   int nk = 0, m = 0;
   std::array<unsigned, kMax> crow;
+  std::array<double, kMax> scale;
   for (LdltPlan::Mask c = clamped; c; c &= c - 1) {
     const unsigned i = static_cast<unsigned>(mask_low(c));
     xf[i] = 0.0;
@@ -84,13 +85,29 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
     if (q == nk) kpos[nk++] = pk;
     normal_of[m] = q;
     crow[m] = i;
-    double* ci = ws.clamped_cols.data() + m * kMax;
-    const double scale = (at_lo >> i & 1 ? -1.0 : 1.0) * std::abs(pairslh[2 * i + 1]);
-    for (int a = 0; a < nf; ++a) ci[a] = a_at(rows[a], i) * scale;
+    scale[m] = (at_lo >> i & 1 ? -1.0 : 1.0) * std::abs(pairslh[2 * i + 1]);
     ++m;
   }
   if (m == 0) return true;
-  ws.ldlt.solve_many(ws.clamped_cols.data(), m, kMax);
+  // The columns depend on A, the factor and the clamped rows' signs and mu only: a re-solve with
+  // the kept factor (a new right-hand side, IslandStep::resolve) finds them as they were. The
+  // factor's serial stands for A (a new A is factorised, which counts a new serial).
+  LcpWorkspace::ClampedColumns& kept = ws.clamped;
+  bool same = kept.factor != 0 && kept.factor == ws.factors && kept.n == n &&
+              kept.mask == clamped && kept.m == m;
+  for (int r = 0; same && r < m; ++r) same = kept.scale[r] == scale[r];
+  if (!same) {
+    for (int r = 0; r < m; ++r) {
+      double* ci = ws.clamped_cols.data() + r * kMax;
+      for (int a = 0; a < nf; ++a) ci[a] = a_at(rows[a], crow[r]) * scale[r];
+    }
+    ws.ldlt.solve_many(ws.clamped_cols.data(), m, kMax);
+    kept.factor = ws.factors;
+    kept.n = n;
+    kept.mask = clamped;
+    kept.m = m;
+    for (int r = 0; r < m; ++r) kept.scale[r] = scale[r];
+  }
   Small g = Small::Identity(nk, nk);
   SmallVec yk(nk);
   for (int p = 0; p < nk; ++p) yk[p] = x[kpos[p]];

@@ -13,7 +13,9 @@ namespace ernest::dynamics {
 using namespace detail;
 
 void RoverSim::Impl::read_outputs(double dt) {
-  for (auto b : body) canonicalise_quaternion(b);
+  if (!quaternions_fixed)
+    for (auto b : body) canonicalise_quaternion(b);
+  quaternions_fixed = false;  // (until the next own step)
   st.time += dt;
   const Mat3 rc = rot(kChassis);
   const Vec3 origin = pos(kChassis) - rc * p.chassis_com;

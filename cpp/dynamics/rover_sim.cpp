@@ -41,65 +41,6 @@ void set_body_pose(dBodyID b, const Vec3& p, const Mat3& r) {
   dBodySetQuaternion(b, dq);
 }
 
-// ODE normalises a quaternion whenever it is set, so a restored state is only bit-identical if
-// the stored quaternion is a fixed point of that normalisation (it need not be: normalisation can
-// alternate between two neighbours). After each step we move every body's quaternion to a nearby
-// fixed point by nudging its largest component by a few ulps (a 1e-16 change) until setting it
-// returns it unchanged; the rotation matrix is then recomputed from exactly that quaternion.
-// A quick test for that fixed point without the round trip through ODE: its normalisation as ODE
-// 0.16 writes it (dxSafeNormalize4: (q0² + q1² + q2²) + q3², times 1 / sqrt). It is only trusted
-// after it agreed with ODE on 4096 random unit quaternions at start-up, so a different ODE build
-// just takes the slow path.
-namespace {
-bool normalise_is_identity(const dReal* q) {
-  const double l = 1.0 / std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  return q[0] * l == q[0] && q[1] * l == q[1] && q[2] * l == q[2] && q[3] * l == q[3];
-}
-
-bool quick_fixed_point_test_agrees_with_ode() {
-  dWorldID w = dWorldCreate();
-  dBodyID b = dBodyCreate(w);
-  bool agree = true;
-  std::uint64_t x = 0x9E3779B97F4A7C15ull;  // xorshift: a fixed, reproducible sample
-  for (int k = 0; k < 4096 && agree; ++k) {
-    dQuaternion q;
-    for (double& c : q) {
-      x ^= x << 13, x ^= x >> 7, x ^= x << 17;
-      c = (static_cast<double>(x >> 11) * 0x1.0p-53 - 0.5) * (k % 3 == 0 ? 1e-3 : 1.0);
-    }
-    dBodySetQuaternion(b, q);  // normalised by ODE
-    const dReal* n = dBodyGetQuaternion(b);
-    dQuaternion c = {n[0], n[1], n[2], n[3]};
-    dBodySetQuaternion(b, c);  // a fixed point if and only if this returns it unchanged
-    const bool ode_says = std::memcmp(c, dBodyGetQuaternion(b), sizeof c) == 0;
-    agree = ode_says == normalise_is_identity(c);
-  }
-  dBodyDestroy(b);
-  dWorldDestroy(w);
-  return agree;
-}
-}  // namespace
-
-void canonicalise_quaternion(dBodyID b) {
-  static const bool quick = quick_fixed_point_test_agrees_with_ode();
-  const dReal* q0 = dBodyGetQuaternion(b);
-  if (quick && normalise_is_identity(q0)) return;  // already a fixed point: nothing to do
-  const dQuaternion base = {q0[0], q0[1], q0[2], q0[3]};
-  int big = 0;
-  for (int k = 1; k < 4; ++k)
-    if (std::abs(base[k]) > std::abs(base[big])) big = k;
-  static const int kNudge[] = {0, 1, -1, 2, -2, 3, -3, 4, -4};
-  for (int nudge : kNudge) {
-    dQuaternion c = {base[0], base[1], base[2], base[3]};
-    for (int u = 0; u < std::abs(nudge); ++u)
-      c[big] = std::nextafter(c[big], nudge > 0 ? 2.0 : -2.0);
-    dBodySetQuaternion(b, c);
-    const dReal* q = dBodyGetQuaternion(b);
-    if (std::memcmp(c, q, sizeof(dQuaternion)) == 0) return;
-  }
-  // No fixed point within 4 ulps (never seen): keep ODE's normalised value.
-}
-
 // Reference contact point of a torus-shaped tyre (§3.3: DARTS accounts for the torus when locating
 // the point penetrating farthest): centre-circle radius R0 = r - b/2 in the wheel plane, tube
 // radius b/2. For a locally plane terrain of normal n the deepest tyre point is the centre-circle

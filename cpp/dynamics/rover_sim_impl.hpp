@@ -20,6 +20,7 @@
 #include "ernest/dynamics/island_step.hpp"
 #include "ernest/dynamics/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
 #include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/dynamics/ode_quaternion.hpp"  // canonicalise_quaternion
 #include "ernest/dynamics/row_guess.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/soil/bekker_wong.hpp"
@@ -46,7 +47,6 @@ inline Mat3 to_mat(const dReal* r) {  // ODE stores 3x4 row-major
   return m;
 }
 
-void canonicalise_quaternion(dBodyID b);
 
 struct DeepestPoint {
   Vec3 point;    // reference contact point on the tyre (deepest into the terrain)
@@ -183,6 +183,9 @@ struct RoverData {
 
   // The step being taken: its length and the §3.4 spring–dampers as ERP / CFM at it.
   double h = 0.0;  // length of the step being taken: opt.dt, or a substep of it (step())
+  // The last attempt's own step left every quaternion canonical (IslandStep::quaternions_fixed):
+  // read_outputs() need not canonicalise them (six tests with a square root and a division).
+  bool quaternions_fixed = false;
   bool obstacles_collected = false;  // step() found this step's obstacle contacts already
   // §3.4 spring–damper as ERP / CFM at h, implicit (rigid ground; obstacles: set_obstacle_rows)
   double contact_erp = 0.0, contact_cfm = 0.0;

@@ -241,6 +241,7 @@ void RoverSim::Impl::add_lmotor_joint(dBodyID b, const Vec3& axis, double fmax, 
 // dWorldStep (with the sparse path off when our solve already found it cannot: ODE's Dantzig
 // solver then, as the hook would have gone).
 void RoverSim::Impl::world_step() {
+  quaternions_fixed = false;
   if (opt.stepper != Stepper::Own) {
     island.materialise(world, contacts);
     dWorldStep(world, h);
@@ -253,6 +254,7 @@ void RoverSim::Impl::world_step() {
     ++stats.own_steps;
     if (r == Outcome::Resolved) ++stats.rhs_resolves;
     if (r == Outcome::ResolvedCaps) ++stats.cap_resolves;
+    quaternions_fixed = island.quaternions_fixed();
     return;
   }
   ++stats.own_fallbacks;
