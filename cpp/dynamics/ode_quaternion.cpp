@@ -18,7 +18,9 @@ double inverse_norm(const dReal* q) {
 }
 
 bool normalise_is_identity(const dReal* q) {
-  const double l = inverse_norm(q);
+  const double sum = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  if (sum == 1.0) return true;  // 1 / sqrt(1) is 1 exactly: no square root, no division
+  const double l = 1.0 / std::sqrt(sum);
   return q[0] * l == q[0] && q[1] * l == q[1] && q[2] * l == q[2] && q[3] * l == q[3];
 }
 
@@ -62,9 +64,22 @@ int largest(const dReal* q) {
   return big;
 }
 
+// base with its largest component moved n ulps up (n > 0) or down: std::nextafter n times,
+// here on the bits (|c[big]| >= 1/2 for a unit quaternion, so never zero, and the doubles of one
+// sign are ordered as their bits, across binades too).
 void nudge(const dReal* base, int big, int n, dReal* c) {
   for (int k = 0; k < 4; ++k) c[k] = base[k];
-  for (int u = 0; u < std::abs(n); ++u) c[big] = std::nextafter(c[big], n > 0 ? 2.0 : -2.0);
+  if (n == 0) return;
+  if (base[big] == 0.0 || !std::isfinite(base[big])) {  // (not from a normalised quaternion)
+    for (int u = 0; u < std::abs(n); ++u) c[big] = std::nextafter(c[big], n > 0 ? 2.0 : -2.0);
+    return;
+  }
+  std::uint64_t bits;
+  std::memcpy(&bits, &base[big], sizeof bits);
+  const bool away_from_zero = (base[big] > 0.0) == (n > 0);
+  const auto steps = static_cast<std::uint64_t>(std::abs(n));
+  bits = away_from_zero ? bits + steps : bits - steps;
+  std::memcpy(&c[big], &bits, sizeof bits);
 }
 
 }  // namespace
