@@ -69,8 +69,11 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
   };
   for (unsigned i = 0; i < n; ++i) pos[i] = -1;
   for (int a = 0; a < nf; ++a) pos[rows[a]] = a;
-  // c_i = A_SS⁻¹ A_Si times s_i mu_i, for each clamped row whose normal is solved (a normal at
-  // zero makes its friction zero); K: those normals' places.
+  // x_i = s_i mu_i x_k for each clamped row i whose normal k is solved (a normal at zero makes
+  // its friction zero): their forces enter the solved rows as columns of A times x_k, so each
+  // normal gets one column, c_k = A_SS⁻¹ sum_i s_i mu_i A_Si (one solve per sliding contact,
+  // not one per friction row: both rows of a pyramid slide at once in most rock contacts).
+  // K: those normals' places.
   std::array<int, kMax> kpos, normal_of;
   int nk = 0, m = 0;
   std::array<unsigned, kMax> crow;
@@ -97,33 +100,37 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
               kept.mask == clamped && kept.m == m;
   for (int r = 0; same && r < m; ++r) same = kept.scale[r] == scale[r];
   if (!same) {
-    for (int r = 0; r < m; ++r) {
-      double* ci = ws.clamped_cols.data() + r * kMax;
-      for (int a = 0; a < nf; ++a) ci[a] = a_at(rows[a], crow[r]) * scale[r];
+    for (int q = 0; q < nk; ++q) {
+      double* cq = ws.clamped_cols.data() + q * kMax;
+      for (int a = 0; a < nf; ++a) cq[a] = 0.0;
     }
-    ws.ldlt.solve_many(ws.clamped_cols.data(), m, kMax);
+    for (int r = 0; r < m; ++r) {  // (rows in ascending order: a fixed order of the sums)
+      double* cq = ws.clamped_cols.data() + normal_of[r] * kMax;
+      for (int a = 0; a < nf; ++a) cq[a] += a_at(rows[a], crow[r]) * scale[r];
+    }
+    ws.ldlt.solve_many(ws.clamped_cols.data(), nk, kMax);
     kept.factor = ws.factors;
     kept.n = n;
     kept.mask = clamped;
     kept.m = m;
     for (int r = 0; r < m; ++r) kept.scale[r] = scale[r];
   }
+  // (I + G) x_K = y_K, G's column q the normals' entries of c_q
   Small g = Small::Identity(nk, nk);
   SmallVec yk(nk);
   for (int p = 0; p < nk; ++p) yk[p] = x[kpos[p]];
-  for (int r = 0; r < m; ++r) {
-    const double* ci = ws.clamped_cols.data() + r * kMax;
-    for (int p = 0; p < nk; ++p) g(p, normal_of[r]) += ci[kpos[p]];
+  for (int q = 0; q < nk; ++q) {
+    const double* cq = ws.clamped_cols.data() + q * kMax;
+    for (int p = 0; p < nk; ++p) g(p, q) += cq[kpos[p]];
   }
   const SmallVec xk = Eigen::PartialPivLU<Small>(g).solve(yk);
   if (!xk.allFinite()) return false;
-  for (int r = 0; r < m; ++r) {
-    const double* ci = ws.clamped_cols.data() + r * kMax;
-    const double xn = xk[normal_of[r]];
-    for (int a = 0; a < nf; ++a) x[a] -= ci[a] * xn;
-    const unsigned i = crow[r];
-    xf[i] = (at_lo >> i & 1 ? -1.0 : 1.0) * std::abs(pairslh[2 * i + 1]) * xn;
+  for (int q = 0; q < nk; ++q) {
+    const double* cq = ws.clamped_cols.data() + q * kMax;
+    const double xn = xk[q];
+    for (int a = 0; a < nf; ++a) x[a] -= cq[a] * xn;
   }
+  for (int r = 0; r < m; ++r) xf[crow[r]] = scale[r] * xk[normal_of[r]];
   return true;
 }
 
