@@ -74,6 +74,10 @@ IslandStep::Joint& IslandStep::add_permanent(dJointID j, Kind kind) {
 
 void IslandStep::add_hinge(dJointID j, const dReal axis_world[3]) {
   Joint& jt = add_permanent(j, Kind::Hinge);
+  // its stops and motor (hinge_rows refuses either; never set after build)
+  hinge_params_[n_permanent_ - 1] = HingeParams{dJointGetHingeParam(j, dParamLoStop),
+                                                dJointGetHingeParam(j, dParamHiStop),
+                                                dJointGetHingeParam(j, dParamFMax)};
   // setAxes (joint.cpp): the normalised axis in body 2's frame, R2ᵀ q
   dReal q[4] = {axis_world[0], axis_world[1], axis_world[2], 0.0};
   dNormalize3(q);
@@ -82,7 +86,40 @@ void IslandStep::add_hinge(dJointID j, const dReal axis_world[3]) {
 
 void IslandStep::add_universal(dJointID j) { add_permanent(j, Kind::Universal); }
 
-void IslandStep::add_amotor(dJointID j) { add_permanent(j, Kind::AMotor); }
+void IslandStep::add_amotor(dJointID j) {
+  add_permanent(j, Kind::AMotor);
+  MotorParams& m = motor_params_[n_permanent_ - 1];
+  m.mode = dJointGetAMotorMode(j);
+  m.num_axes = dJointGetAMotorNumAxes(j);
+  for (int i = 0; i < 3; ++i) {
+    const int g = i * (dParamGroup2 - dParamGroup1);
+    m.lo[i] = dJointGetAMotorParam(j, dParamLoStop + g);
+    m.hi[i] = dJointGetAMotorParam(j, dParamHiStop + g);
+    m.fmax[i] = dJointGetAMotorParam(j, dParamFMax + g);
+    m.vel[i] = dJointGetAMotorParam(j, dParamVel + g);
+    m.cfm[i] = dJointGetAMotorParam(j, dParamCFM + g);
+  }
+}
+
+void IslandStep::set_amotor_param(dJointID j, int parameter, double value) {
+  dJointSetAMotorParam(j, parameter, value);
+  forget();
+  int k = 0;
+  while (k < n_permanent_ && permanent_[k].id != j) ++k;
+  if (k == n_permanent_ || permanent_[k].kind != Kind::AMotor)
+    throw std::invalid_argument("IslandStep::set_amotor_param: not one of its angular motors");
+  MotorParams& m = motor_params_[k];
+  const int group = (parameter - dParamLoStop) / (dParamGroup2 - dParamGroup1);
+  if (group < 0 || group > 2) throw std::invalid_argument("IslandStep::set_amotor_param: parameter");
+  const int base = parameter - group * (dParamGroup2 - dParamGroup1);
+  std::array<double, 3>* slot = base == dParamLoStop ? &m.lo
+                                : base == dParamHiStop ? &m.hi
+                                : base == dParamFMax ? &m.fmax
+                                : base == dParamVel ? &m.vel
+                                : base == dParamCFM ? &m.cfm : nullptr;
+  // (a parameter step() does not read: ODE has it, the copy needs nothing)
+  if (slot) (*slot)[group] = dJointGetAMotorParam(j, parameter);  // as ODE stored it
+}
 
 void IslandStep::add_contact(const dContact& c, dBodyID b1, dBodyID b2, dJointFeedback* fb) {
   if (n_attempt_ >= kMaxAttemptJoints) {  // counted, not kept: step() refuses (never: the caller's static_assert)
@@ -178,9 +215,9 @@ int IslandStep::angular_row(Joint& jt, const dReal* d) {
 bool IslandStep::hinge_rows(Joint& jt, double fps, double erp) {
   const dJointID j = jt.id;
   // A motor or stops on the hinge itself add a row this step does not reproduce.
-  const double lo = dJointGetHingeParam(j, dParamLoStop), hi = dJointGetHingeParam(j, dParamHiStop);
-  if (dJointGetHingeParam(j, dParamFMax) > 0.0 || ((lo >= -M_PI || hi <= M_PI) && lo <= hi))
-    return false;
+  const HingeParams& hp = hinge_params_[&jt - permanent_.data()];
+  const double lo = hp.lo, hi = hp.hi;
+  if (hp.fmax > 0.0 || ((lo >= -M_PI || hi <= M_PI) && lo <= hi)) return false;
   if (jt.a < 0 || jt.b < 0) return false;
   dVector3 w1, w2, ax1, ax2, p, q, b;
   dJointGetHingeAnchor(j, w1);
@@ -252,15 +289,15 @@ bool IslandStep::universal_rows(Joint& jt, double fps, double erp) {
 
 bool IslandStep::amotor_rows(Joint& jt) {
   const dJointID j = jt.id;
-  if (dJointGetAMotorMode(j) != dAMotorUser || jt.a < 0) return false;
-  const int num = dJointGetAMotorNumAxes(j);
+  const MotorParams& mp = motor_params_[&jt - permanent_.data()];
+  if (mp.mode != dAMotorUser || jt.a < 0) return false;
+  const int num = mp.num_axes;
   for (int i = 0; i < num; ++i) {
-    const int g = i * (dParamGroup2 - dParamGroup1);
     double err = 0.0;
-    if (rotational_limit(dJointGetAMotorAngle(j, i), dJointGetAMotorParam(j, dParamLoStop + g),
-                         dJointGetAMotorParam(j, dParamHiStop + g), err) != 0)
+    if ((mp.lo[i] != -dInfinity || mp.hi[i] != dInfinity) &&
+        rotational_limit(dJointGetAMotorAngle(j, i), mp.lo[i], mp.hi[i], err) != 0)
       return false;  // a stop on the motor: not reproduced
-    const double fmax = dJointGetAMotorParam(j, dParamFMax + g);
+    const double fmax = mp.fmax[i];
     if (!(fmax > 0.0)) continue;
     dVector3 ax;
     dJointGetAMotorAxis(j, i, ax);
@@ -270,8 +307,8 @@ bool IslandStep::amotor_rows(Joint& jt) {
       j_[r][3 + c] = ax[c];
       if (jt.b >= 0) j_[r][9 + c] = -ax[c];
     }
-    bx_[2 * r] = dJointGetAMotorParam(j, dParamVel + g);
-    cfm_[r] = dJointGetAMotorParam(j, dParamCFM + g);
+    bx_[2 * r] = mp.vel[i];
+    cfm_[r] = mp.cfm[i];
     lh_[2 * r] = -fmax;
     lh_[2 * r + 1] = fmax;
   }

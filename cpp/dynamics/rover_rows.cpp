@@ -124,16 +124,14 @@ void RoverSim::Impl::emit(RowModes modes) {
     }
     // (only what changed: the joints keep their parameters between steps)
     const dJointID jm = k < 4 ? wheel_motor[k] : gimbal_motor;
-    // (a permanent joint's parameter changed: the island step may not reuse its last rows)
+    // (through the island step, which keeps a copy and may not reuse its last rows now)
     if (!(motor_set[k][0] == m.target)) {
-      dJointSetAMotorParam(jm, k == 5 ? dParamVel2 : dParamVel, m.target);
+      island.set_amotor_param(jm, k == 5 ? dParamVel2 : dParamVel, m.target);
       motor_set[k][0] = m.target;
-      island.forget();
     }
     if (!(motor_set[k][1] == fmax)) {
-      dJointSetAMotorParam(jm, k == 5 ? dParamFMax2 : dParamFMax, fmax);
+      island.set_amotor_param(jm, k == 5 ? dParamFMax2 : dParamFMax, fmax);
       motor_set[k][1] = fmax;
-      island.forget();
     }
   }
   // ---- ground
