@@ -1,6 +1,7 @@
 // Quaternions as ODE stores them (ode_quaternion.hpp).
 #include "ernest/dynamics/ode_quaternion.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -17,10 +18,39 @@ double inverse_norm(const dReal* q) {
   return 1.0 / std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
 }
 
+// 1 / sqrt(s) for the sums of squares of unit quaternions as they come (within 16 doubles of 1:
+// s = 1 + k 2^-53 below 1, 1 + k 2^-52 above), by s's bits: the same values, computed once, so
+// that the test and its nudges (fixed_point_quaternion) spend no square root and no division.
+constexpr int kNearOne = 16;
+std::int64_t bits_from_one(double s) {
+  std::int64_t b, one;
+  const double one_d = 1.0;
+  std::memcpy(&b, &s, sizeof b);
+  std::memcpy(&one, &one_d, sizeof one);
+  return b - one;
+}
+
+double inverse_sqrt(double s) {
+  static const auto table = [] {
+    std::array<double, 2 * kNearOne + 1> t{};
+    for (int k = -kNearOne; k <= kNearOne; ++k) {
+      std::int64_t b;
+      const double one = 1.0;
+      std::memcpy(&b, &one, sizeof b);
+      b += k;
+      double s_k;
+      std::memcpy(&s_k, &b, sizeof s_k);
+      t[k + kNearOne] = 1.0 / std::sqrt(s_k);
+    }
+    return t;
+  }();
+  const std::int64_t k = bits_from_one(s);
+  if (k >= -kNearOne && k <= kNearOne) return table[k + kNearOne];
+  return 1.0 / std::sqrt(s);
+}
+
 bool normalise_is_identity(const dReal* q) {
-  const double sum = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-  if (sum == 1.0) return true;  // 1 / sqrt(1) is 1 exactly: no square root, no division
-  const double l = 1.0 / std::sqrt(sum);
+  const double l = inverse_sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   return q[0] * l == q[0] && q[1] * l == q[1] && q[2] * l == q[2] && q[3] * l == q[3];
 }
 
