@@ -148,14 +148,10 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     for (W m = alive; m; m &= m - 1) perm_[k++] = static_cast<std::uint8_t>(low(m));
     std::array<int, kMaxRows> pos;
     for (int p = 0; p < n; ++p) pos[perm_[p]] = p;
-    // L + D's pattern (row numbering, lower): each column's rows, the tail a clique.
-    for (int i = 0; i < n; ++i)
-      filled_[i] = bit(i) | ((alive >> i & 1) ? alive & before<W>(i) : W{0});
-    for (int c = 0; c < dense_from_; ++c) {
-      const int pc = perm_[c];
-      filled_[pc] |= column[c] & before<W>(pc);
-      for (W m = column[c] & ~before<W>(pc + 1); m; m &= m - 1) filled_[low(m)] |= bit(pc);
-    }
+    // L + D's pattern (row numbering, lower) is the graph the elimination left in adj: A's
+    // edges and the fill, each one an entry of the column of whichever end went first (the tail
+    // a clique, or its rows' degrees would not have stopped the loop).
+    for (int i = 0; i < n; ++i) filled_[i] = bit(i) | (adj[i] & before<W>(i));
 
     // Sparse columns as position lists (ascending), and L's rows (positions) as masks of their
     // sparse columns (for the copies).
@@ -213,49 +209,34 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
         m &= ~span<W>(j, count);
       }
     }
-    // Copies row by row (runs along a row of both matrices), the sparse part then the tail.
-    std::array<unsigned, kMaxRows> row_at;  // A's row at each position
+    // What SparseLdlt::factor copies from A into the working matrix: each row's entries of the
+    // factor (its sparse columns, then its diagonal or the tail up to it) in runs of consecutive
+    // columns (runs in the working matrix; rows never join, w_stride_ >= n), each entry with its
+    // own source in A (lower triangle: the larger row's).
+    std::array<std::uint32_t, kMaxRows> row_at;  // A's row at each position
     for (int p = 0; p < n; ++p) row_at[p] = rows_[perm_[p]];
-    n_copies_ = 0;
-    std::uint32_t src_end = 0, dst_end = 0;  // one past the last run
-    const auto copy = [&](unsigned i, int c, std::uint32_t dst) {  // i: row r's row in A
-      const unsigned j = row_at[c];
-      const std::uint32_t src = i >= j ? i * stride + j : j * stride + i;
-      if (n_copies_ > 0 && dst == dst_end && src == src_end)
-        ++copies_[n_copies_ - 1].count;
-      else
-        copies_[n_copies_++] = Copy{src, static_cast<std::uint16_t>(dst), 1};
-      src_end = src + 1;
-      dst_end = dst + 1;
-    };
+    n_fills_ = 0;
+    int nsrc = 0;
     for (int r = 0; r < n; ++r) {
-      const unsigned i = row_at[r];
-      const auto row_dst = static_cast<std::uint32_t>(r * w_stride_);
-      for (W m = row_cols[r]; m; m &= m - 1) copy(i, low(m), row_dst + low(m));
-      if (r < dense_from_) copy(i, r, row_dst + r);
-      for (int c = dense_from_; c <= r; ++c) copy(i, c, row_dst + c);
+      const std::uint32_t i = row_at[r];
+      W cols = row_cols[r] | (r < dense_from_ ? bit(r) : span<W>(dense_from_, r - dense_from_ + 1));
+      while (cols) {
+        const int first = low(cols), count = run_from(cols, first);
+        fills_[n_fills_++] = Fill{static_cast<std::uint16_t>(nsrc),
+                                  static_cast<std::uint16_t>(r * w_stride_ + first),
+                                  static_cast<std::uint16_t>(count)};
+        for (int c = first; c < first + count; ++c) {
+          const std::uint32_t j = row_at[c];
+          fill_src_[nsrc++] = i >= j ? i * stride + j : j * stride + i;
+        }
+        cols &= ~span<W>(first, count);
+      }
     }
   };
   if (n <= 64)
     analyse_as(std::uint64_t{0});
   else
     analyse_as(Mask{0});
-
-  // ---- For SparseLdlt::factor (session 10): the copies as runs contiguous in the working
-  // matrix only, each entry with its own source (fewer, longer runs than copies_, whose runs
-  // must be contiguous in A as well).
-  n_fills_ = 0;
-  int nsrc = 0;
-  for (int g = 0; g < n_copies_; ++g) {
-    const Copy& c = copies_[g];
-    Fill* last = n_fills_ > 0 ? &fills_[n_fills_ - 1] : nullptr;
-    if (last && last->dst + last->count == c.dst) {
-      last->count = static_cast<std::uint16_t>(last->count + c.count);
-    } else {
-      fills_[n_fills_++] = Fill{static_cast<std::uint16_t>(nsrc), c.dst, c.count};
-    }
-    for (int e = 0; e < c.count; ++e) fill_src_[nsrc++] = c.src + e;
-  }
 }
 
 }  // namespace ernest::dynamics

@@ -58,22 +58,15 @@ class LdltPlan {
   };
   int n_supers_ = 0;
   std::array<Supernode, kMaxRows> supers_{};
-  // The entries of the factor's pattern, copied from A into the working matrix in runs that are
-  // consecutive in both.
-  struct Copy {
-    std::uint32_t src;
-    std::uint16_t dst, count;
-  };
-  int n_copies_ = 0;
-  std::array<Copy, kMaxRows * (kMaxRows + 1) / 2> copies_{};
   // The entries of A outside the factor's pattern, in runs consecutive in A (covers(a)).
   struct Zeros {
     std::uint32_t src, count;
   };
   int n_zeros_ = 0;
   std::array<Zeros, kMaxRows * (kMaxRows + 1) / 2> zeros_{};
-  // The same entries as copies_ in runs contiguous in the working matrix only, each entry's
-  // source in fill_src_ (from first on): what SparseLdlt::factor copies.
+  // The entries of the factor's pattern, copied from A into the working matrix (SparseLdlt::
+  // factor) in runs contiguous in the working matrix, each entry's source in fill_src_ (from
+  // first on).
   struct Fill {
     std::uint16_t first, dst, count;
   };
