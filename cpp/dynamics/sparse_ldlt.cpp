@@ -161,15 +161,12 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     for (int c = 0; c < dense_from_; ++c) {
       col_start_[c] = static_cast<std::uint16_t>(nr);
       W below = 0;  // positions
-      for (W m = column[c]; m; m &= m - 1) below |= bit(pos[low(m)]);
-      while (below) {
-        const int first = low(below), count = run_from(below, first);
-        for (int r = first; r < first + count; ++r) {
-          col_rows_[nr++] = static_cast<std::uint8_t>(r);
-          row_cols[r] |= bit(c);
-        }
-        below &= ~span<W>(first, count);
+      for (W m = column[c]; m; m &= m - 1) {
+        const int r = pos[low(m)];
+        below |= bit(r);
+        row_cols[r] |= bit(c);
       }
+      for (; below; below &= below - 1) col_rows_[nr++] = static_cast<std::uint8_t>(low(below));
     }
     col_start_[dense_from_] = static_cast<std::uint16_t>(nr);
     n_supers_ = 0;
@@ -225,10 +222,12 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
         fills_[n_fills_++] = Fill{static_cast<std::uint16_t>(nsrc),
                                   static_cast<std::uint16_t>(r * w_stride_ + first),
                                   static_cast<std::uint16_t>(count)};
-        for (int c = first; c < first + count; ++c) {
-          const std::uint32_t j = row_at[c];
-          fill_src_[nsrc++] = i >= j ? i * stride + j : j * stride + i;
+        std::uint32_t* src = fill_src_.data() + nsrc;
+        for (int e = 0; e < count; ++e) {
+          const std::uint32_t j = row_at[first + e];
+          src[e] = std::max(i, j) * stride + std::min(i, j);
         }
+        nsrc += count;
         cols &= ~span<W>(first, count);
       }
     }
