@@ -103,19 +103,20 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     constexpr int bits = kBits<W>;
     const auto bit = [](int i) { return word_bit<W>(i); };
     const auto low = [](W m) { return word_low(m); };
-    std::array<W, kMaxRows> adj;  // symmetric adjacency without the diagonal
-    for (int i = 0; i < n; ++i) adj[i] = static_cast<W>(pattern[i]) & ~bit(i);
+    std::array<W, kMaxRows> adj;  // symmetric adjacency, each row its own neighbour
+    for (int i = 0; i < n; ++i) adj[i] = static_cast<W>(pattern[i]) | bit(i);
     for (int i = 0; i < n; ++i)
       for (W m = static_cast<W>(pattern[i]) & before<W>(i); m; m &= m - 1) adj[low(m)] |= bit(i);
     // Minimum degree (ties: lowest row), eliminating on the masks; each eliminated row's live
     // neighbours are its column of L. Once the live rows form a clique they are the dense tail.
     // A row's degree changes only when it neighbours the eliminated row: kept, not recounted;
     // the live rows of each degree are a set (by_degree), so the lowest row of least degree is
-    // found without a scan of all rows.
+    // found without a scan of all rows. (Degrees count the row itself: one less mask operation
+    // per neighbour.)
     std::array<W, kMaxRows> column;  // L's column pattern, row numbering
     std::array<int, kMaxRows> degree;
-    std::array<W, kMaxRows> by_degree;
-    for (int d = 0; d < n; ++d) by_degree[d] = 0;
+    std::array<W, kMaxRows + 1> by_degree;
+    for (int d = 0; d <= n; ++d) by_degree[d] = 0;
     for (int i = 0; i < n; ++i) {
       degree[i] = word_pop(adj[i]);
       by_degree[degree[i]] |= bit(i);
@@ -125,13 +126,13 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     for (; k < n; ++k) {
       while (!by_degree[least]) ++least;
       const int best = low(by_degree[least]);
-      if (least == n - k - 1) break;  // every live row is adjacent to every other
+      if (least == n - k) break;  // every live row is adjacent to every other
       by_degree[least] &= ~bit(best);
-      const W nb = adj[best] & alive;
       const W left = alive & ~bit(best);
+      const W nb = adj[best] & left;
       for (W m = nb; m; m &= m - 1) {
         const int v = low(m);
-        adj[v] |= nb & ~bit(v);
+        adj[v] |= nb;
         const int d = word_pop(adj[v] & left);
         if (d != degree[v]) {
           by_degree[degree[v]] &= ~bit(v);
@@ -151,7 +152,7 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     // L + D's pattern (row numbering, lower) is the graph the elimination left in adj: A's
     // edges and the fill, each one an entry of the column of whichever end went first (the tail
     // a clique, or its rows' degrees would not have stopped the loop).
-    for (int i = 0; i < n; ++i) filled_[i] = bit(i) | (adj[i] & before<W>(i));
+    for (int i = 0; i < n; ++i) filled_[i] = adj[i] & before<W>(i + 1);
 
     // Sparse columns as position lists (ascending), and L's rows (positions) as masks of their
     // sparse columns (for the copies).
