@@ -26,7 +26,8 @@ bool LdltPlan::same_rows(const unsigned* rows, int n, int stride) const {
 // Also compiled for AVX2 (common/vector_math.hpp): 4 entries per comparison (GCC's generic
 // vectors; two SSE2 halves in the baseline copy).
 ERNEST_ALSO_AVX2
-bool LdltPlan::covers(const double* a) const {
+bool LdltPlan::covers(const double* a) {
+  if (n_zeros_ < 0) list_zeros();
   typedef double V4 __attribute__((vector_size(32)));
   typedef long long M4 __attribute__((vector_size(32)));
   typedef double V2 __attribute__((vector_size(16)));
@@ -100,7 +101,6 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
   }
   const auto analyse_as = [&](auto word) __attribute__((always_inline)) {
     using W = decltype(word);
-    constexpr int bits = kBits<W>;
     const auto bit = [](int i) { return word_bit<W>(i); };
     const auto low = [](W m) { return word_low(m); };
     std::array<W, kMaxRows> adj;  // symmetric adjacency, each row its own neighbour
@@ -185,28 +185,6 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
       supers_[n_supers_++] = Supernode{static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(w)};
       c += w;
     }
-    // A's entries outside the factor's pattern (covers(a)), in runs consecutive in A: runs of
-    // zero bits along a row whose rows are consecutive in A (next_row), joined to the run
-    // before where they continue it.
-    W next_row = 0;  // bit j: rows_[j] == rows_[j - 1] + 1
-    for (int j = 1; j < n; ++j)
-      if (rows_[j] == rows_[j - 1] + 1) next_row |= bit(j);
-    n_zeros_ = 0;
-    std::uint32_t zeros_end = 0;  // one past the last run
-    for (int i = 0; i < n; ++i) {
-      const W outside = static_cast<W>(~filled_[i]) & before<W>(i + 1);
-      const W joined = outside & next_row;
-      for (W m = outside; m;) {
-        const int j = low(m), count = j + 1 < bits ? 1 + run_from(joined, j + 1) : 1;
-        const std::uint32_t src = rows_[i] * stride + rows_[j];
-        if (n_zeros_ > 0 && zeros_end == src)
-          zeros_[n_zeros_ - 1].count += count;
-        else
-          zeros_[n_zeros_++] = Zeros{src, static_cast<std::uint32_t>(count)};
-        zeros_end = src + count;
-        m &= ~span<W>(j, count);
-      }
-    }
     // What SparseLdlt::factor copies from A into the working matrix: each row's entries of the
     // factor (its sparse columns, then its diagonal or the tail up to it) in runs of consecutive
     // columns (runs in the working matrix; rows never join, w_stride_ >= n), each entry with its
@@ -237,6 +215,44 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     analyse_as(std::uint64_t{0});
   else
     analyse_as(Mask{0});
+  n_zeros_ = -1;  // listed when first needed (covers(a))
+}
+
+// A's entries outside the factor's pattern, in runs consecutive in A: runs of zero bits along a
+// row whose rows are consecutive in A (next_row), joined to the run before where they continue
+// it. Only covers(a) reads them, and most new plans on rocks are replaced before they are
+// checked: listed on the first check, not by analyse. Also compiled for AVX2 (tzcnt).
+ERNEST_ALSO_AVX2
+void LdltPlan::list_zeros() {
+  const auto list_as = [&](auto word) __attribute__((always_inline)) {
+    using W = decltype(word);
+    constexpr int bits = kBits<W>;
+    const auto bit = [](int i) { return word_bit<W>(i); };
+    const auto low = [](W m) { return word_low(m); };
+    W next_row = 0;  // bit j: rows_[j] == rows_[j - 1] + 1
+    for (int j = 1; j < n_; ++j)
+      if (rows_[j] == rows_[j - 1] + 1) next_row |= bit(j);
+    n_zeros_ = 0;
+    std::uint32_t zeros_end = 0;  // one past the last run
+    for (int i = 0; i < n_; ++i) {
+      const W outside = static_cast<W>(~filled_[i]) & before<W>(i + 1);
+      const W joined = outside & next_row;
+      for (W m = outside; m;) {
+        const int j = low(m), count = j + 1 < bits ? 1 + run_from(joined, j + 1) : 1;
+        const std::uint32_t src = rows_[i] * stride_ + rows_[j];
+        if (n_zeros_ > 0 && zeros_end == src)
+          zeros_[n_zeros_ - 1].count += count;
+        else
+          zeros_[n_zeros_++] = Zeros{src, static_cast<std::uint32_t>(count)};
+        zeros_end = src + count;
+        m &= ~span<W>(j, count);
+      }
+    }
+  };
+  if (n_ <= 64)
+    list_as(std::uint64_t{0});
+  else
+    list_as(Mask{0});
 }
 
 }  // namespace ernest::dynamics

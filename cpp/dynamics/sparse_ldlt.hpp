@@ -30,8 +30,8 @@ class LdltPlan {
   /// non-zero lies in the pattern of the factor.
   bool covers(const Mask* pattern) const;
   /// The same asked of A itself (same rows and stride): every entry outside the factor's
-  /// pattern is zero. Reads only those entries.
-  bool covers(const double* a) const;
+  /// pattern is zero. Reads only those entries (listed on the first call: not const).
+  bool covers(const double* a);
   int size() const { return n_; }
   int stride() const { return stride_; }
   const unsigned* rows() const { return rows_.data(); }
@@ -42,6 +42,7 @@ class LdltPlan {
 
  private:
   friend class SparseLdlt;
+  void list_zeros();
   int n_ = 0, stride_ = 0, dense_from_ = 0, w_stride_ = 0;
   std::array<Mask, kMaxRows> pattern_{};
   std::array<Mask, kMaxRows> filled_{};  // pattern of L + D (lower), row numbering
@@ -62,7 +63,7 @@ class LdltPlan {
   struct Zeros {
     std::uint32_t src, count;
   };
-  int n_zeros_ = 0;
+  int n_zeros_ = -1;  // -1: not listed yet (list_zeros)
   std::array<Zeros, kMaxRows * (kMaxRows + 1) / 2> zeros_{};
   // The entries of the factor's pattern, copied from A into the working matrix (SparseLdlt::
   // factor) in runs contiguous in the working matrix, each entry's source in fill_src_ (from
