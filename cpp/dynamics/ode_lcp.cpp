@@ -181,7 +181,7 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
       // A remembered plan for these rows serves if A has no non-zero outside its factor;
       // otherwise A's pattern (each solved row's non-zeros left of the diagonal, two at a time,
       // the other rows' columns dropped) makes or grows one.
-      LdltPlan* known = ws.find(rows.data(), nf, static_cast<int>(stride));
+      LdltPlan* known = ws.find(solved, nf, static_cast<int>(stride));
       const LdltPlan* plan = known;
       if (!known || !known->covers(A)) {
         std::array<Mask, kMax> pattern;

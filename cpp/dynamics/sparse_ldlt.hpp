@@ -26,6 +26,8 @@ class LdltPlan {
   void analyse(const Mask* pattern, const unsigned* rows, int n, int stride);
   /// Whether this plan was made for these rows and stride.
   bool same_rows(const unsigned* rows, int n, int stride) const;
+  /// Its rows as a set (bit r: row r), 0 if a row is kMaxRows or more.
+  Mask row_set() const { return row_set_; }
   /// Whether a matrix with this pattern (same rows) can be factorised with this plan: every
   /// non-zero lies in the pattern of the factor.
   bool covers(const Mask* pattern) const;
@@ -44,6 +46,7 @@ class LdltPlan {
   friend class SparseLdlt;
   void list_zeros();
   int n_ = 0, stride_ = 0, dense_from_ = 0, w_stride_ = 0;
+  Mask row_set_ = 0;
   std::array<Mask, kMaxRows> pattern_{};
   std::array<Mask, kMaxRows> filled_{};  // pattern of L + D (lower), row numbering
   std::array<unsigned, kMaxRows> rows_{};
