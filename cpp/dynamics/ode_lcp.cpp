@@ -64,6 +64,7 @@ __attribute__((noinline)) void solved_pattern(const double* A, unsigned stride,
   using Mask = LdltPlan::Mask;
   constexpr unsigned kMax = LdltPlan::kMaxRows;
   const __m128d zero = _mm_setzero_pd();
+  const bool narrow = rows[nf - 1] < 64;  // every row set in one word (the rover on rocks)
   for (int a = 0; a < nf; ++a) {
     const unsigned i = rows[a];
     const double* row = A + i * stride;
@@ -72,9 +73,24 @@ __attribute__((noinline)) void solved_pattern(const double* A, unsigned stride,
           _mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero)));
     };
     // Columns 0 .. i read in pairs (row[i + 1] exists: i is odd when stride == n), four at a
-    // time where they lie within, each 64 in a word (no 128-bit shifts).
+    // time where they lie within; then the other rows' columns dropped, top down.
+    if (narrow) {  // the same steps on one word
+      std::uint64_t m = 0;
+      unsigned j = 0;
+      for (; j + 3 <= i + 1; j += 4) m |= (pair(j) | pair(j + 2) << 2) << j;
+      for (; j <= i; j += 2) m |= pair(j) << j;
+      const std::uint64_t upto = i < 63 ? (std::uint64_t{2} << i) - 1 : ~std::uint64_t{0};
+      m &= upto;
+      for (std::uint64_t o = ~static_cast<std::uint64_t>(solved) & upto; o;) {
+        const std::uint64_t below = (std::uint64_t{1} << (63 - __builtin_clzll(o))) - 1;
+        m = (m & below) | ((m >> 1) & ~below);
+        o &= below;
+      }
+      pattern[a] = m;
+      continue;
+    }
     Mask m = 0;
-    for (unsigned base = 0; base <= i; base += 64) {
+    for (unsigned base = 0; base <= i; base += 64) {  // each 64 in a word (no 128-bit shifts)
       const unsigned last = std::min(i, base + 63);
       std::uint64_t w = 0;
       unsigned j = base;
@@ -84,7 +100,7 @@ __attribute__((noinline)) void solved_pattern(const double* A, unsigned stride,
     }
     const Mask upto = i < kMax - 1 ? (Mask{2} << i) - 1 : ~Mask{0};
     m &= upto;
-    for (Mask o = ~solved & upto; o;) {  // drop the other rows' columns, top down
+    for (Mask o = ~solved & upto; o;) {
       const Mask below = (Mask{1} << mask_high(o)) - 1;
       m = (m & below) | ((m >> 1) & ~below);
       o &= below;
