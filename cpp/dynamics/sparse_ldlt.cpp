@@ -95,13 +95,13 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
   n_ = n;
   stride_ = stride;
   w_stride_ = (n + 3) & ~3;
-  row_set_ = 0;
+  std::uint64_t set[2] = {0, 0};  // the row set's words (no 128-bit shifts)
   for (int i = 0; i < n; ++i) {
     pattern_[i] = pattern[i];
     rows_[i] = rows[i];
-    row_set_ |= rows[i] < kMaxRows ? Mask{1} << rows[i] : 0;
+    set[rows[i] >> 6 & 1] |= std::uint64_t{1} << (rows[i] & 63);
   }
-  if (rows[n - 1] >= kMaxRows) row_set_ = 0;
+  row_set_ = rows[n - 1] < kMaxRows ? set[0] | Mask{set[1]} << 64 : 0;
   const auto analyse_as = [&](auto word) __attribute__((always_inline)) {
     using W = decltype(word);
     const auto bit = [](int i) { return word_bit<W>(i); };
