@@ -17,6 +17,14 @@ LdltPlan* LcpWorkspace::find(const unsigned* rows, int n, int stride) {
   return nullptr;
 }
 
+LdltPlan* LcpWorkspace::find(LdltPlan::Mask rows, int n, int stride) {
+  for (int q = 0; q < kPlans; ++q)  // (a plan's row set is 0 only if it has a row past 127)
+    if (q < n_plans && plans[q].row_set() == rows && plans[q].size() == n &&
+        plans[q].stride() == stride)
+      return &plans[q];
+  return nullptr;
+}
+
 const LdltPlan& LcpWorkspace::adopt(LdltPlan* remembered, const LdltPlan::Mask* pattern,
                                     const unsigned* rows, int n, int stride) {
   if (remembered) {  // grow its pattern

@@ -55,6 +55,60 @@ int pos_of(LdltPlan::Mask solved, unsigned i) {
   return mask_count(solved & ((LdltPlan::Mask{1} << i) - 1));
 }
 
+// The pattern of A's solved rows (ascending, `solved` as a set), as LdltPlan::analyse wants it:
+// each row's non-zeros left of the diagonal, the other rows' columns dropped. Out of line: only
+// new row sets need it, and inlined it costs solve_sparse's every call a little.
+__attribute__((noinline)) void solved_pattern(const double* A, unsigned stride,
+                                              const unsigned* rows, int nf, LdltPlan::Mask solved,
+                                              LdltPlan::Mask* pattern) {
+  using Mask = LdltPlan::Mask;
+  constexpr unsigned kMax = LdltPlan::kMaxRows;
+  const __m128d zero = _mm_setzero_pd();
+  const bool narrow = rows[nf - 1] < 64;  // every row set in one word (the rover on rocks)
+  for (int a = 0; a < nf; ++a) {
+    const unsigned i = rows[a];
+    const double* row = A + i * stride;
+    const auto pair = [&](unsigned j) {  // bits 0, 1: row[j], row[j + 1] non-zero
+      return static_cast<std::uint64_t>(
+          _mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero)));
+    };
+    // Columns 0 .. i read in pairs (row[i + 1] exists: i is odd when stride == n), four at a
+    // time where they lie within; then the other rows' columns dropped, top down.
+    if (narrow) {  // the same steps on one word
+      std::uint64_t m = 0;
+      unsigned j = 0;
+      for (; j + 3 <= i + 1; j += 4) m |= (pair(j) | pair(j + 2) << 2) << j;
+      for (; j <= i; j += 2) m |= pair(j) << j;
+      const std::uint64_t upto = i < 63 ? (std::uint64_t{2} << i) - 1 : ~std::uint64_t{0};
+      m &= upto;
+      for (std::uint64_t o = ~static_cast<std::uint64_t>(solved) & upto; o;) {
+        const std::uint64_t below = (std::uint64_t{1} << (63 - __builtin_clzll(o))) - 1;
+        m = (m & below) | ((m >> 1) & ~below);
+        o &= below;
+      }
+      pattern[a] = m;
+      continue;
+    }
+    Mask m = 0;
+    for (unsigned base = 0; base <= i; base += 64) {  // each 64 in a word (no 128-bit shifts)
+      const unsigned last = std::min(i, base + 63);
+      std::uint64_t w = 0;
+      unsigned j = base;
+      for (; j + 3 <= last + 1; j += 4) w |= (pair(j) | pair(j + 2) << 2) << (j - base);
+      for (; j <= last; j += 2) w |= pair(j) << (j - base);
+      m |= Mask{w} << base;
+    }
+    const Mask upto = i < kMax - 1 ? (Mask{2} << i) - 1 : ~Mask{0};
+    m &= upto;
+    for (Mask o = ~solved & upto; o;) {
+      const Mask below = (Mask{1} << mask_high(o)) - 1;
+      m = (m & below) | ((m >> 1) & ~below);
+      o &= below;
+    }
+    pattern[a] = m;
+  }
+}
+
 // The solve with friction rows at their bounds (solve_sparse): on entry x holds y = A_SS⁻¹ b_S
 // (rows[0..nf), factorised in ws.ldlt); on return x holds x_S and xf the clamped rows' forces
 // s_i mu_i x_k(i). Returns false if the small system is singular or not finite.
@@ -203,28 +257,12 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
       ws.ldlt.solve(x.data());
     } else if (nf > 0) {
       // A remembered plan for these rows serves if A has no non-zero outside its factor;
-      // otherwise A's pattern (each solved row's non-zeros left of the diagonal, two at a time,
-      // the other rows' columns dropped) makes or grows one.
-      LdltPlan* known = ws.find(rows.data(), nf, static_cast<int>(stride));
+      // otherwise A's pattern makes or grows one.
+      LdltPlan* known = ws.find(solved, nf, static_cast<int>(stride));
       const LdltPlan* plan = known;
       if (!known || !known->covers(A)) {
         std::array<Mask, kMax> pattern;
-        const __m128d zero = _mm_setzero_pd();
-        for (int a = 0; a < nf; ++a) {
-          const unsigned i = rows[a];
-          const double* row = A + i * stride;
-          Mask m = 0;
-          for (unsigned j = 0; j <= i; j += 2)  // row[i + 1] exists: i is odd when stride == n
-            m |= Mask(_mm_movemask_pd(_mm_cmpneq_pd(_mm_loadu_pd(row + j), zero))) << j;
-          const Mask upto = i < kMax - 1 ? (Mask{2} << i) - 1 : ~Mask{0};
-          m &= upto;
-          for (Mask o = ~solved & upto; o;) {  // drop the other rows' columns, top down
-            const Mask below = (Mask{1} << mask_high(o)) - 1;
-            m = (m & below) | ((m >> 1) & ~below);
-            o &= below;
-          }
-          pattern[a] = m;
-        }
+        solved_pattern(A, stride, rows.data(), nf, solved, pattern.data());
         plan = &ws.adopt(known, pattern.data(), rows.data(), nf, static_cast<int>(stride));
       }
       ++ws.factors;

@@ -94,6 +94,8 @@ struct LcpWorkspace {
 
   /// The remembered plan for these rows, or nullptr.
   LdltPlan* find(const unsigned* rows, int n, int stride);
+  /// The same for rows given as a set (bit r: row r; n of them): no walk over the rows.
+  LdltPlan* find(LdltPlan::Mask rows, int n, int stride);
   /// A plan covering this pattern: `remembered` (find()'s answer) grown by it, or a new one.
   const LdltPlan& adopt(LdltPlan* remembered, const LdltPlan::Mask* pattern,
                         const unsigned* rows, int n, int stride);

@@ -26,7 +26,8 @@ bool LdltPlan::same_rows(const unsigned* rows, int n, int stride) const {
 // Also compiled for AVX2 (common/vector_math.hpp): 4 entries per comparison (GCC's generic
 // vectors; two SSE2 halves in the baseline copy).
 ERNEST_ALSO_AVX2
-bool LdltPlan::covers(const double* a) const {
+bool LdltPlan::covers(const double* a) {
+  if (n_zeros_ < 0) list_zeros();
   typedef double V4 __attribute__((vector_size(32)));
   typedef long long M4 __attribute__((vector_size(32)));
   typedef double V2 __attribute__((vector_size(16)));
@@ -94,28 +95,31 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
   n_ = n;
   stride_ = stride;
   w_stride_ = (n + 3) & ~3;
+  std::uint64_t set[2] = {0, 0};  // the row set's words (no 128-bit shifts)
   for (int i = 0; i < n; ++i) {
     pattern_[i] = pattern[i];
     rows_[i] = rows[i];
+    set[rows[i] >> 6 & 1] |= std::uint64_t{1} << (rows[i] & 63);
   }
+  row_set_ = rows[n - 1] < kMaxRows ? set[0] | Mask{set[1]} << 64 : 0;
   const auto analyse_as = [&](auto word) __attribute__((always_inline)) {
     using W = decltype(word);
-    constexpr int bits = kBits<W>;
     const auto bit = [](int i) { return word_bit<W>(i); };
     const auto low = [](W m) { return word_low(m); };
-    std::array<W, kMaxRows> adj;  // symmetric adjacency without the diagonal
-    for (int i = 0; i < n; ++i) adj[i] = static_cast<W>(pattern[i]) & ~bit(i);
+    std::array<W, kMaxRows> adj;  // symmetric adjacency, each row its own neighbour
+    for (int i = 0; i < n; ++i) adj[i] = static_cast<W>(pattern[i]) | bit(i);
     for (int i = 0; i < n; ++i)
       for (W m = static_cast<W>(pattern[i]) & before<W>(i); m; m &= m - 1) adj[low(m)] |= bit(i);
     // Minimum degree (ties: lowest row), eliminating on the masks; each eliminated row's live
     // neighbours are its column of L. Once the live rows form a clique they are the dense tail.
     // A row's degree changes only when it neighbours the eliminated row: kept, not recounted;
     // the live rows of each degree are a set (by_degree), so the lowest row of least degree is
-    // found without a scan of all rows.
+    // found without a scan of all rows. (Degrees count the row itself: one less mask operation
+    // per neighbour.)
     std::array<W, kMaxRows> column;  // L's column pattern, row numbering
     std::array<int, kMaxRows> degree;
-    std::array<W, kMaxRows> by_degree;
-    for (int d = 0; d < n; ++d) by_degree[d] = 0;
+    std::array<W, kMaxRows + 1> by_degree;
+    for (int d = 0; d <= n; ++d) by_degree[d] = 0;
     for (int i = 0; i < n; ++i) {
       degree[i] = word_pop(adj[i]);
       by_degree[degree[i]] |= bit(i);
@@ -125,13 +129,13 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     for (; k < n; ++k) {
       while (!by_degree[least]) ++least;
       const int best = low(by_degree[least]);
-      if (least == n - k - 1) break;  // every live row is adjacent to every other
+      if (least == n - k) break;  // every live row is adjacent to every other
       by_degree[least] &= ~bit(best);
-      const W nb = adj[best] & alive;
       const W left = alive & ~bit(best);
+      const W nb = adj[best] & left;
       for (W m = nb; m; m &= m - 1) {
         const int v = low(m);
-        adj[v] |= nb & ~bit(v);
+        adj[v] |= nb;
         const int d = word_pop(adj[v] & left);
         if (d != degree[v]) {
           by_degree[degree[v]] &= ~bit(v);
@@ -148,14 +152,10 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     for (W m = alive; m; m &= m - 1) perm_[k++] = static_cast<std::uint8_t>(low(m));
     std::array<int, kMaxRows> pos;
     for (int p = 0; p < n; ++p) pos[perm_[p]] = p;
-    // L + D's pattern (row numbering, lower): each column's rows, the tail a clique.
-    for (int i = 0; i < n; ++i)
-      filled_[i] = bit(i) | ((alive >> i & 1) ? alive & before<W>(i) : W{0});
-    for (int c = 0; c < dense_from_; ++c) {
-      const int pc = perm_[c];
-      filled_[pc] |= column[c] & before<W>(pc);
-      for (W m = column[c] & ~before<W>(pc + 1); m; m &= m - 1) filled_[low(m)] |= bit(pc);
-    }
+    // L + D's pattern (row numbering, lower) is the graph the elimination left in adj: A's
+    // edges and the fill, each one an entry of the column of whichever end went first (the tail
+    // a clique, or its rows' degrees would not have stopped the loop).
+    for (int i = 0; i < n; ++i) filled_[i] = adj[i] & before<W>(i + 1);
 
     // Sparse columns as position lists (ascending), and L's rows (positions) as masks of their
     // sparse columns (for the copies).
@@ -165,15 +165,12 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
     for (int c = 0; c < dense_from_; ++c) {
       col_start_[c] = static_cast<std::uint16_t>(nr);
       W below = 0;  // positions
-      for (W m = column[c]; m; m &= m - 1) below |= bit(pos[low(m)]);
-      while (below) {
-        const int first = low(below), count = run_from(below, first);
-        for (int r = first; r < first + count; ++r) {
-          col_rows_[nr++] = static_cast<std::uint8_t>(r);
-          row_cols[r] |= bit(c);
-        }
-        below &= ~span<W>(first, count);
+      for (W m = column[c]; m; m &= m - 1) {
+        const int r = pos[low(m)];
+        below |= bit(r);
+        row_cols[r] |= bit(c);
       }
+      for (; below; below &= below - 1) col_rows_[nr++] = static_cast<std::uint8_t>(low(below));
     }
     col_start_[dense_from_] = static_cast<std::uint16_t>(nr);
     n_supers_ = 0;
@@ -191,20 +188,61 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
       supers_[n_supers_++] = Supernode{static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(w)};
       c += w;
     }
-    // A's entries outside the factor's pattern (covers(a)), in runs consecutive in A: runs of
-    // zero bits along a row whose rows are consecutive in A (next_row), joined to the run
-    // before where they continue it.
+    // What SparseLdlt::factor copies from A into the working matrix: each row's entries of the
+    // factor (its sparse columns, then its diagonal or the tail up to it) in runs of consecutive
+    // columns (runs in the working matrix; rows never join, w_stride_ >= n), each entry with its
+    // own source in A (lower triangle: the larger row's).
+    std::array<std::uint32_t, kMaxRows> row_at;  // A's row at each position
+    for (int p = 0; p < n; ++p) row_at[p] = rows_[perm_[p]];
+    n_fills_ = 0;
+    int nsrc = 0;
+    for (int r = 0; r < n; ++r) {
+      const std::uint32_t i = row_at[r];
+      W cols = row_cols[r] | (r < dense_from_ ? bit(r) : span<W>(dense_from_, r - dense_from_ + 1));
+      while (cols) {
+        const int first = low(cols), count = run_from(cols, first);
+        fills_[n_fills_++] = Fill{static_cast<std::uint16_t>(nsrc),
+                                  static_cast<std::uint16_t>(r * w_stride_ + first),
+                                  static_cast<std::uint16_t>(count)};
+        std::uint32_t* src = fill_src_.data() + nsrc;
+        for (int e = 0; e < count; ++e) {
+          const std::uint32_t j = row_at[first + e];
+          src[e] = std::max(i, j) * stride + std::min(i, j);
+        }
+        nsrc += count;
+        cols &= ~span<W>(first, count);
+      }
+    }
+  };
+  if (n <= 64)
+    analyse_as(std::uint64_t{0});
+  else
+    analyse_as(Mask{0});
+  n_zeros_ = -1;  // listed when first needed (covers(a))
+}
+
+// A's entries outside the factor's pattern, in runs consecutive in A: runs of zero bits along a
+// row whose rows are consecutive in A (next_row), joined to the run before where they continue
+// it. Only covers(a) reads them, and most new plans on rocks are replaced before they are
+// checked: listed on the first check, not by analyse. Also compiled for AVX2 (tzcnt).
+ERNEST_ALSO_AVX2
+void LdltPlan::list_zeros() {
+  const auto list_as = [&](auto word) __attribute__((always_inline)) {
+    using W = decltype(word);
+    constexpr int bits = kBits<W>;
+    const auto bit = [](int i) { return word_bit<W>(i); };
+    const auto low = [](W m) { return word_low(m); };
     W next_row = 0;  // bit j: rows_[j] == rows_[j - 1] + 1
-    for (int j = 1; j < n; ++j)
+    for (int j = 1; j < n_; ++j)
       if (rows_[j] == rows_[j - 1] + 1) next_row |= bit(j);
     n_zeros_ = 0;
     std::uint32_t zeros_end = 0;  // one past the last run
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < n_; ++i) {
       const W outside = static_cast<W>(~filled_[i]) & before<W>(i + 1);
       const W joined = outside & next_row;
       for (W m = outside; m;) {
         const int j = low(m), count = j + 1 < bits ? 1 + run_from(joined, j + 1) : 1;
-        const std::uint32_t src = rows_[i] * stride + rows_[j];
+        const std::uint32_t src = rows_[i] * stride_ + rows_[j];
         if (n_zeros_ > 0 && zeros_end == src)
           zeros_[n_zeros_ - 1].count += count;
         else
@@ -213,49 +251,11 @@ void LdltPlan::analyse(const Mask* pattern, const unsigned* rows, int n, int str
         m &= ~span<W>(j, count);
       }
     }
-    // Copies row by row (runs along a row of both matrices), the sparse part then the tail.
-    std::array<unsigned, kMaxRows> row_at;  // A's row at each position
-    for (int p = 0; p < n; ++p) row_at[p] = rows_[perm_[p]];
-    n_copies_ = 0;
-    std::uint32_t src_end = 0, dst_end = 0;  // one past the last run
-    const auto copy = [&](unsigned i, int c, std::uint32_t dst) {  // i: row r's row in A
-      const unsigned j = row_at[c];
-      const std::uint32_t src = i >= j ? i * stride + j : j * stride + i;
-      if (n_copies_ > 0 && dst == dst_end && src == src_end)
-        ++copies_[n_copies_ - 1].count;
-      else
-        copies_[n_copies_++] = Copy{src, static_cast<std::uint16_t>(dst), 1};
-      src_end = src + 1;
-      dst_end = dst + 1;
-    };
-    for (int r = 0; r < n; ++r) {
-      const unsigned i = row_at[r];
-      const auto row_dst = static_cast<std::uint32_t>(r * w_stride_);
-      for (W m = row_cols[r]; m; m &= m - 1) copy(i, low(m), row_dst + low(m));
-      if (r < dense_from_) copy(i, r, row_dst + r);
-      for (int c = dense_from_; c <= r; ++c) copy(i, c, row_dst + c);
-    }
   };
-  if (n <= 64)
-    analyse_as(std::uint64_t{0});
+  if (n_ <= 64)
+    list_as(std::uint64_t{0});
   else
-    analyse_as(Mask{0});
-
-  // ---- For SparseLdlt::factor (session 10): the copies as runs contiguous in the working
-  // matrix only, each entry with its own source (fewer, longer runs than copies_, whose runs
-  // must be contiguous in A as well).
-  n_fills_ = 0;
-  int nsrc = 0;
-  for (int g = 0; g < n_copies_; ++g) {
-    const Copy& c = copies_[g];
-    Fill* last = n_fills_ > 0 ? &fills_[n_fills_ - 1] : nullptr;
-    if (last && last->dst + last->count == c.dst) {
-      last->count = static_cast<std::uint16_t>(last->count + c.count);
-    } else {
-      fills_[n_fills_++] = Fill{static_cast<std::uint16_t>(nsrc), c.dst, c.count};
-    }
-    for (int e = 0; e < c.count; ++e) fill_src_[nsrc++] = c.src + e;
-  }
+    list_as(Mask{0});
 }
 
 }  // namespace ernest::dynamics

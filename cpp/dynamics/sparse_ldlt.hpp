@@ -26,12 +26,14 @@ class LdltPlan {
   void analyse(const Mask* pattern, const unsigned* rows, int n, int stride);
   /// Whether this plan was made for these rows and stride.
   bool same_rows(const unsigned* rows, int n, int stride) const;
+  /// Its rows as a set (bit r: row r), 0 if a row is kMaxRows or more.
+  Mask row_set() const { return row_set_; }
   /// Whether a matrix with this pattern (same rows) can be factorised with this plan: every
   /// non-zero lies in the pattern of the factor.
   bool covers(const Mask* pattern) const;
   /// The same asked of A itself (same rows and stride): every entry outside the factor's
-  /// pattern is zero. Reads only those entries.
-  bool covers(const double* a) const;
+  /// pattern is zero. Reads only those entries (listed on the first call: not const).
+  bool covers(const double* a);
   int size() const { return n_; }
   int stride() const { return stride_; }
   const unsigned* rows() const { return rows_.data(); }
@@ -42,7 +44,9 @@ class LdltPlan {
 
  private:
   friend class SparseLdlt;
+  void list_zeros();
   int n_ = 0, stride_ = 0, dense_from_ = 0, w_stride_ = 0;
+  Mask row_set_ = 0;
   std::array<Mask, kMaxRows> pattern_{};
   std::array<Mask, kMaxRows> filled_{};  // pattern of L + D (lower), row numbering
   std::array<unsigned, kMaxRows> rows_{};
@@ -58,22 +62,15 @@ class LdltPlan {
   };
   int n_supers_ = 0;
   std::array<Supernode, kMaxRows> supers_{};
-  // The entries of the factor's pattern, copied from A into the working matrix in runs that are
-  // consecutive in both.
-  struct Copy {
-    std::uint32_t src;
-    std::uint16_t dst, count;
-  };
-  int n_copies_ = 0;
-  std::array<Copy, kMaxRows * (kMaxRows + 1) / 2> copies_{};
   // The entries of A outside the factor's pattern, in runs consecutive in A (covers(a)).
   struct Zeros {
     std::uint32_t src, count;
   };
-  int n_zeros_ = 0;
+  int n_zeros_ = -1;  // -1: not listed yet (list_zeros)
   std::array<Zeros, kMaxRows * (kMaxRows + 1) / 2> zeros_{};
-  // The same entries as copies_ in runs contiguous in the working matrix only, each entry's
-  // source in fill_src_ (from first on): what SparseLdlt::factor copies.
+  // The entries of the factor's pattern, copied from A into the working matrix (SparseLdlt::
+  // factor) in runs contiguous in the working matrix, each entry's source in fill_src_ (from
+  // first on).
   struct Fill {
     std::uint16_t first, dst, count;
   };

@@ -130,7 +130,11 @@ RowSet row_set(int k) {
   return s;
 }
 LdltPlan* find(detail::LcpWorkspace& ws, const RowSet& s) {
-  return ws.find(s.rows.data(), static_cast<int>(s.rows.size()), 64);
+  LdltPlan* p = ws.find(s.rows.data(), static_cast<int>(s.rows.size()), 64);
+  Mask set = 0;
+  for (const unsigned r : s.rows) set |= bit(static_cast<int>(r));
+  EXPECT_EQ(ws.find(set, static_cast<int>(s.rows.size()), 64), p);  // the same as a row set
+  return p;
 }
 const LdltPlan& adopt(detail::LcpWorkspace& ws, const RowSet& s, const std::vector<Mask>& p) {
   return ws.adopt(find(ws, s), p.data(), s.rows.data(), static_cast<int>(s.rows.size()), 64);

@@ -126,6 +126,13 @@ TEST(SparseLdlt, MinimumDegreeEliminatesAStarWithoutFill) {
   a[7 * n + 3] = -0.0;  // a zero all the same
   a[9 * n + 0] = 0.0;
   EXPECT_TRUE(plan.covers(a.data()));
+  // The zero entries are listed on the first check after each analysis: the plan analysed again
+  // with the leaves' entry in its factor accepts a non-zero there.
+  plan.analyse(leaves_coupled.data(), rows.data(), n, n);
+  a[7 * n + 3] = 1.0;
+  EXPECT_TRUE(plan.covers(a.data()));
+  a[8 * n + 3] = 1.0;  // (row 8 couples to nothing but the hub)
+  EXPECT_FALSE(plan.covers(a.data()));
 }
 
 TEST(SparseLdlt, RefusesAMatrixThatIsNotPositiveDefinite) {
