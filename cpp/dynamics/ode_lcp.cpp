@@ -63,6 +63,10 @@ __attribute__((noinline)) void solved_pattern(const double* A, unsigned stride,
                                               LdltPlan::Mask* pattern) {
   using Mask = LdltPlan::Mask;
   constexpr unsigned kMax = LdltPlan::kMaxRows;
+  if (stride == 1) {  // one row (dPAD(1) = 1): no row[1] to read in a pair
+    pattern[0] = A[0] != 0.0 ? 1 : 0;
+    return;
+  }
   const __m128d zero = _mm_setzero_pd();
   const bool narrow = rows[nf - 1] < 64;  // every row set in one word (the rover on rocks)
   for (int a = 0; a < nf; ++a) {
