@@ -12,8 +12,8 @@
 // ODE stays the source of truth: bodies, masses, the permanent joints' anchors, axes and stops
 // (public getters), and dWorldStep is the reference and the fallback. The angular motors'
 // parameters, which RoverSim sets every step, are the exception: set through set_amotor_param(),
-// which sets ODE's and keeps a copy that step() reads (hinges' stops and motor: read once). Anything this
-// step does not reproduce exactly (another joint type, a joint option it does not know, a body
+// which sets ODE's and keeps a copy that step() reads (hinges' stops and motor: read once).
+// Anything this step does not reproduce exactly (another joint type, a joint option it does not know, a body
 // outside the rover, a problem the sparse solver refuses) makes step() return false without
 // touching ODE: the caller then materialises the recorded joints and calls dWorldStep.
 #pragma once
@@ -34,7 +34,8 @@ class IslandStep {
   static constexpr int kBodies = 6;
   static constexpr int kMaxRows = LdltPlan::kMaxRows;
   static constexpr int kMaxAttemptJoints = 96;  // contacts and linear motors of one attempt
-  static constexpr int kMaxJoints = 16 + kMaxAttemptJoints;
+  static constexpr int kMaxPermanent = 16;  // hinges, universals, angular motors
+  static constexpr int kMaxJoints = kMaxPermanent + kMaxAttemptJoints;
   static constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
   /// The bodies (all of the world's) and the permanent joints between them. Hinges' second
@@ -114,8 +115,8 @@ class IslandStep {
   struct HingeParams {
     double lo = 0.0, hi = 0.0, fmax = 0.0;
   };
-  std::array<MotorParams, 16> motor_params_{};  // by permanent joint
-  std::array<HingeParams, 16> hinge_params_{};
+  std::array<MotorParams, kMaxPermanent> motor_params_{};  // by permanent joint
+  std::array<HingeParams, kMaxPermanent> hinge_params_{};
   struct BodyState {
     const dReal *pos, *R, *q, *lvel, *avel, *facc, *tacc;
     dReal invI[12];      // world frame (3x4, ODE's layout)
@@ -169,7 +170,7 @@ class IslandStep {
   std::array<double, kBodies> mass_{};
   std::array<std::array<dReal, 12>, kBodies> inv_inertia_body_{};  // 3x4
   std::array<std::array<dReal, 12>, kBodies> inertia_body_{};
-  std::array<Joint, 16> permanent_{};
+  std::array<Joint, kMaxPermanent> permanent_{};
   int n_permanent_ = 0;
   std::array<Joint, kMaxAttemptJoints> attempt_{};  // buffer 0 (clear_attempt; 1: attempt2_)
   int cur_ = 0;  // this attempt's buffer

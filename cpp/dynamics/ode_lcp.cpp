@@ -154,8 +154,8 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
   // the kept factor (a new right-hand side, IslandStep::resolve) finds them as they were. The
   // factor's serial stands for A (a new A is factorised, which counts a new serial).
   LcpWorkspace::ClampedColumns& kept = ws.clamped;
-  bool same = kept.factor != 0 && kept.factor == ws.factors && kept.n == n &&
-              kept.mask == clamped && kept.m == m;
+  // (the same factor and clamped rows: the same solved normals, so the same m)
+  bool same = kept.factor != 0 && kept.factor == ws.factors && kept.mask == clamped;
   for (int r = 0; same && r < m; ++r) same = kept.scale[r] == scale[r];
   if (!same) {
     for (int q = 0; q < nk; ++q) {
@@ -168,9 +168,7 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
     }
     ws.ldlt.solve_many(ws.clamped_cols.data(), nk, kMax);
     kept.factor = ws.factors;
-    kept.n = n;
     kept.mask = clamped;
-    kept.m = m;
     for (int r = 0; r < m; ++r) kept.scale[r] = scale[r];
   }
   // (I + G) x_K = y_K, G's column q the normals' entries of c_q

@@ -69,12 +69,10 @@ struct LcpWorkspace {
   bool coulomb_friction = false;
   /// A_SS⁻¹ A_Si of the friction rows at a bound (solve_sparse), one column per row.
   std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> clamped_cols{};
-  /// What clamped_cols were computed for: the factor (serial of `factors`), the problem size,
-  /// the friction rows at a bound and their signed mu (0 factor: nothing kept).
+  /// What clamped_cols were computed for: the factor (serial of `factors`: it fixes the problem
+  /// and its solved rows), the friction rows at a bound and their signed mu (0: nothing kept).
   struct ClampedColumns {
     std::uint64_t factor = 0;
-    unsigned n = 0;
-    int m = 0;
     LdltPlan::Mask mask = 0;
     std::array<double, LdltPlan::kMaxRows> scale{};
   };

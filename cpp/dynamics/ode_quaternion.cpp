@@ -14,43 +14,38 @@ namespace {
 // 0.16 writes it (dxSafeNormalize4: (q0² + q1² + q2²) + q3², times 1 / sqrt). It is only trusted
 // after it agreed with ODE on 4096 random unit quaternions at start-up, so a different ODE build
 // just takes the slow path.
-double inverse_norm(const dReal* q) {
-  return 1.0 / std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+double sum_of_squares(const dReal* q) {
+  return q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
 }
 
 // 1 / sqrt(s) for the sums of squares of unit quaternions as they come (within 16 doubles of 1:
 // s = 1 + k 2^-53 below 1, 1 + k 2^-52 above), by s's bits: the same values, computed once, so
 // that the test and its nudges (fixed_point_quaternion) spend no square root and no division.
 constexpr int kNearOne = 16;
-std::int64_t bits_from_one(double s) {
-  std::int64_t b, one;
-  const double one_d = 1.0;
-  std::memcpy(&b, &s, sizeof b);
-  std::memcpy(&one, &one_d, sizeof one);
-  return b - one;
+std::int64_t bits_of(double x) {
+  std::int64_t b;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
 }
 
 double inverse_sqrt(double s) {
   static const auto table = [] {
     std::array<double, 2 * kNearOne + 1> t{};
     for (int k = -kNearOne; k <= kNearOne; ++k) {
-      std::int64_t b;
-      const double one = 1.0;
-      std::memcpy(&b, &one, sizeof b);
-      b += k;
+      const std::int64_t b = bits_of(1.0) + k;
       double s_k;
       std::memcpy(&s_k, &b, sizeof s_k);
       t[k + kNearOne] = 1.0 / std::sqrt(s_k);
     }
     return t;
   }();
-  const std::int64_t k = bits_from_one(s);
+  const std::int64_t k = bits_of(s) - bits_of(1.0);
   if (k >= -kNearOne && k <= kNearOne) return table[k + kNearOne];
   return 1.0 / std::sqrt(s);
 }
 
 bool normalise_is_identity(const dReal* q) {
-  const double l = inverse_sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  const double l = inverse_sqrt(sum_of_squares(q));
   return q[0] * l == q[0] && q[1] * l == q[1] && q[2] * l == q[2] && q[3] * l == q[3];
 }
 
@@ -68,8 +63,8 @@ bool quick_fixed_point_test_agrees_with_ode() {
     dBodySetQuaternion(b, q);  // normalised by ODE
     const dReal* n = dBodyGetQuaternion(b);
     dQuaternion c = {n[0], n[1], n[2], n[3]};
-    // (fixed_point_quaternion's premise: ODE's normalisation of q is inverse_norm's)
-    const double l = inverse_norm(q);
+    // (fixed_point_quaternion's premise: ODE's normalisation of q is this)
+    const double l = 1.0 / std::sqrt(sum_of_squares(q));
     for (int i = 0; i < 4 && agree; ++i) agree = q[i] * l == c[i];
     dBodySetQuaternion(b, c);  // a fixed point if and only if this returns it unchanged
     const bool ode_says = std::memcmp(c, dBodyGetQuaternion(b), sizeof c) == 0;
@@ -132,9 +127,9 @@ void canonicalise_quaternion(dBodyID b) {
 
 bool fixed_point_quaternion(const dReal* q, dReal out[4]) {
   if (!quick_test_trusted()) return false;
-  const double sum = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  const double sum = sum_of_squares(q);
   if (!(sum > 0.0) || !std::isfinite(sum)) return false;  // ODE's fault path, or NaN: ODE decides
-  const double l = inverse_norm(q);
+  const double l = 1.0 / std::sqrt(sum);
   const dQuaternion base = {q[0] * l, q[1] * l, q[2] * l, q[3] * l};  // dBodySetQuaternion's
   if (normalise_is_identity(base)) {
     for (int k = 0; k < 4; ++k) out[k] = base[k];

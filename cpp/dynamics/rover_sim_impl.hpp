@@ -47,7 +47,6 @@ inline Mat3 to_mat(const dReal* r) {  // ODE stores 3x4 row-major
   return m;
 }
 
-
 struct DeepestPoint {
   Vec3 point;    // reference contact point on the tyre (deepest into the terrain)
   Vec3 normal;   // terrain normal at it
