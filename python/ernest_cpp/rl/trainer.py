@@ -28,6 +28,7 @@ import yaml
 from .checkpoints import STEP_DIR, load_checkpoint
 from .envs_util import (autoreset_mode, check_spaces, env_layout, evaluate, make_env,
                         make_vector_env, noise_for, resolve_env_id, step_transitions, to_env_action)
+from . import demos
 from .exploration import make_exploration
 from .replay import ReplayBuffer
 from .storage import AtomicDir, clean_stale
@@ -83,6 +84,8 @@ class Trainer:
         self.episodes = 0
         self.update_acc = 0.0
         self.lost_transitions = 0  # env steps of Ray workers that died (never in a local run)
+        self.demo_transitions = 0  # scripted demonstrator transitions in the buffer (demos)
+        demos.check_settings(cfg)
         self.recent = collections.deque(maxlen=int(cfg["log"]["recent_episodes"]))
         self.last_eval: dict = {}
         if resume:
@@ -122,6 +125,7 @@ class Trainer:
                 "step": self.step, "segment": self.segment, "episodes": self.episodes,
                 "update_acc": self.update_acc, "updates": self.agent.updates,
                 "lost_transitions": self.lost_transitions,
+                "demo_transitions": self.demo_transitions,
                 "explore_rng": _rng_state(self.explore_rng),
                 "sample_rng": _rng_state(self.sample_rng),
                 "exploration": self.exploration.state_dict(), "recent": list(self.recent),
@@ -176,6 +180,7 @@ class Trainer:
         self.step, self.segment, self.episodes = st["step"], st["segment"], st["episodes"]
         self.update_acc = st["update_acc"]
         self.lost_transitions = st.get("lost_transitions", 0)
+        self.demo_transitions = st.get("demo_transitions", 0)
         _set_rng_state(self.explore_rng, st["explore_rng"])
         _set_rng_state(self.sample_rng, st["sample_rng"])
         self.exploration.load_state_dict(st["exploration"])
@@ -300,11 +305,25 @@ class Trainer:
             else None
         run.bar = _bar(total, self.step, cfg["log"]["progress_bar"])
         run.baseline = self.run_baseline()
+        self._fill_demos()
         if run.baseline and run.writer:
             for key, v in run.baseline.items():
                 if key != "action":
                     run.writer.add_scalar(f"eval/baseline_{key}", v, self.step)
         return run
+
+    def _fill_demos(self) -> None:
+        """Scripted demonstrator episodes into the replay buffer, once per run (``demos``
+        settings, :mod:`.demos`); a resumed run has them in its saved buffer already."""
+        if self.demo_transitions or self.step > 0:
+            return
+        data, returns = demos.collect(self.env_id, self.cfg, self.low, self.high, self.log)
+        if data is None:
+            return
+        self.buffer.add(**data)
+        self.demo_transitions = len(data["rew"])
+        self.log(f"demos: {self.demo_transitions} transitions from {len(returns)} episodes "
+                 f"(mean return {np.mean(returns):.1f}) in the replay buffer")
 
     def _episode_done(self, run, ret: float, length: int) -> None:
         self.recent.append(float(ret))
