@@ -8,9 +8,10 @@ import sys
 from . import (__version__, evaluate, perception_demo, reproduce, rover_statics, slope_demo,
                soil_curves, transitions, walker_demo, footfall_demo)
 from .rl import commands as rl_commands
+from .rl import pipeline as rl_pipeline
 
 # Each module exposes add_parser(subparsers) and sets `func` on its parser.
-_COMMANDS = [soil_curves, evaluate, rl_commands, transitions, slope_demo, reproduce,
+_COMMANDS = [soil_curves, evaluate, rl_commands, rl_pipeline, transitions, slope_demo, reproduce,
              rover_statics, walker_demo, perception_demo, footfall_demo]
 
 DESCRIPTION = ("ERNEST rover simulation, training and evaluation: run `ernest COMMAND --help` "

@@ -85,6 +85,7 @@ class Trainer:
         self.update_acc = 0.0
         self.lost_transitions = 0  # env steps of Ray workers that died (never in a local run)
         self.demo_transitions = 0  # scripted demonstrator transitions in the buffer (demos)
+        self.elapsed = 0.0  # wall seconds of training over all resumes (learning curves)
         demos.check_settings(cfg)
         self.recent = collections.deque(maxlen=int(cfg["log"]["recent_episodes"]))
         self.last_eval: dict = {}
@@ -126,6 +127,7 @@ class Trainer:
                 "update_acc": self.update_acc, "updates": self.agent.updates,
                 "lost_transitions": self.lost_transitions,
                 "demo_transitions": self.demo_transitions,
+                "elapsed": self._elapsed(),
                 "explore_rng": _rng_state(self.explore_rng),
                 "sample_rng": _rng_state(self.sample_rng),
                 "exploration": self.exploration.state_dict(), "recent": list(self.recent),
@@ -181,6 +183,7 @@ class Trainer:
         self.update_acc = st["update_acc"]
         self.lost_transitions = st.get("lost_transitions", 0)
         self.demo_transitions = st.get("demo_transitions", 0)
+        self.elapsed = float(st.get("elapsed", 0.0))
         _set_rng_state(self.explore_rng, st["explore_rng"])
         _set_rng_state(self.sample_rng, st["sample_rng"])
         self.exploration.load_state_dict(st["exploration"])
@@ -215,6 +218,7 @@ class Trainer:
         res = evaluate(self._policy, self.eval_env, int(ev["episodes"]), int(ev["seed"]),
                        ev.get("info_keys") or ())
         res["step"] = self.step
+        res["elapsed_s"] = self._elapsed()
         self.last_eval = res
         path = os.path.join(self.run_dir, "eval.csv")
         new = not os.path.exists(path)
@@ -294,8 +298,29 @@ class Trainer:
         return self._finish(run)
 
     # The loop's bookkeeping, shared with the Ray trainers (ray_trainer.py).
+    def _elapsed(self) -> float:
+        """Wall seconds of training so far, over all resumes."""
+        t0 = getattr(self, "_t_start", None)
+        return self.elapsed + (time.perf_counter() - t0 if t0 is not None else 0.0)
+
+    def _write_progress(self, run, perf: dict) -> None:
+        """<run>/progress.json (atomically): where the run is and how fast it goes, for
+        ``ernest train-default`` and anyone watching a run."""
+        rec = {"step": self.step, "total": run.total, "updates": self.agent.updates,
+               "episodes": self.episodes, "demo_transitions": self.demo_transitions,
+               "elapsed_s": round(self._elapsed(), 1),
+               "transitions_per_s": round(perf["steps_per_second"], 2),
+               "updates_per_s": round(perf["updates_per_second"], 2),
+               "recent_return": float(np.mean(self.recent)) if self.recent else None,
+               "last_eval": self.last_eval}
+        path = os.path.join(self.run_dir, "progress.json")
+        with open(path + ".tmp", "w") as fh:
+            json.dump(rec, fh)
+        os.replace(path + ".tmp", path)
+
     def _begin(self, total_steps: int | None):
         cfg = self.cfg
+        self._t_start = time.perf_counter()
         total = int(total_steps if total_steps is not None else cfg["total_steps"])
         if total < 1:  # nothing to train on would end in a NaN summary
             raise ValueError(f"total_steps = {total}: must be at least 1")
@@ -372,6 +397,7 @@ class Trainer:
                 for key, v in run.stats.items():
                     run.writer.add_scalar(f"train/{key}", float(np.mean(v)), self.step)
                 run.stats.clear()
+            self._write_progress(run, perf)
             rec = f"{np.mean(self.recent):.2f}" if self.recent else "-"
             extra = (f", lost {self.lost_transitions}" if self.lost_transitions else "") + \
                 self._bar_extra(perf)
@@ -395,6 +421,7 @@ class Trainer:
     def _finish(self, run) -> dict:
         if run.last_ck != self.step:
             self._checkpoint_and_cut()
+        self.elapsed, self._t_start = self._elapsed(), None
         run.bar.close()
         if run.writer:
             run.writer.close()

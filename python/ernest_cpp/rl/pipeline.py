@@ -1,0 +1,259 @@
+"""``ernest train-default``: the default policy from scratch in one command (seed 004 §4.6).
+
+Stages, each skipped when its output is complete, so that running the same command again after a
+kill resumes where it stopped:
+
+1. **specialists**: one ``ernest train`` process per scenario, ``parallel`` at a time (both cores
+   are used by processes with one learner thread each, not by intra-op threads); a run with
+   checkpoints continues with ``--resume``. Progress of every running specialist (transitions,
+   transitions/s, updates/s, last evaluation) is printed every ``progress_every`` seconds from
+   the runs' ``progress.json``.
+2. **consolidate**: ``ernest consolidate`` over the specialists (Table 4's consolidation settings
+   unless the pipeline file overrides them), with the table of the consolidated policy against
+   every specialist on every scenario.
+3. **export**: TorchScript export and weights checksum, written to the policy path atomically.
+4. **evaluate**: ``ernest reproduce`` with the new policy over ``evaluate.seeds`` seeds.
+5. **report**: learning curves against wall time (``curves.png``) and ``training.md``.
+
+The pipeline file (YAML, default ``policies/default.yaml``) names the specialists and their
+settings; see that file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import yaml
+
+DEFAULT_FILE = os.path.join("policies", "default.yaml")
+STAGES = ("specialists", "consolidate", "export", "evaluate", "report")
+_KEYS = {"out", "policy", "parallel", "progress_every", "preset", "specialists", "consolidate",
+         "evaluate"}
+
+
+def load_pipeline(path: str) -> dict:
+    """The pipeline settings, validated (unknown keys and bad values are errors)."""
+    try:
+        with open(path) as fh:
+            cfg = yaml.safe_load(fh) or {}
+    except OSError as exc:
+        raise ValueError(f"pipeline file {path}: {exc.strerror or exc}") from None
+    if not isinstance(cfg, dict):
+        raise ValueError(f"pipeline file {path}: expected a mapping")
+    unknown = sorted(set(cfg) - _KEYS)
+    if unknown:
+        raise ValueError(f"pipeline file {path}: unknown key(s) {', '.join(unknown)}; known: "
+                         f"{', '.join(sorted(_KEYS))}")
+    out = {"out": "runs/default", "policy": "policies/ernest_default.pt", "parallel": 2,
+           "progress_every": 60, "preset": "quick", "consolidate": {"set": []},
+           "evaluate": {"seeds": 10, "sections": "table6,obstacles"}}
+    out.update(cfg)
+    for key in ("parallel", "progress_every"):
+        v = out[key]
+        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+            raise ValueError(f"pipeline {key} = {v!r} must be a whole number >= 1")
+    sp = out.get("specialists")
+    if not isinstance(sp, dict) or not sp:
+        raise ValueError("pipeline specialists: give at least one, name: {scenario, steps, set}")
+    for name, s in sp.items():
+        if not isinstance(s, dict) or "scenario" not in s or "steps" not in s:
+            raise ValueError(f"pipeline specialist {name!r} needs scenario and steps")
+        if isinstance(s["steps"], bool) or not isinstance(s["steps"], int) or s["steps"] < 1:
+            raise ValueError(f"pipeline specialist {name!r}: steps = {s['steps']!r} must be >= 1")
+        extra = sorted(set(s) - {"scenario", "steps", "set"})
+        if extra:
+            raise ValueError(f"pipeline specialist {name!r}: unknown key(s) {', '.join(extra)}")
+        s.setdefault("set", [])
+    return out
+
+
+def _checkpoint_step(run_dir: str) -> int | None:
+    """Step of a run's newest checkpoint (None: no checkpoint yet)."""
+    latest = os.path.join(run_dir, "checkpoints", "LATEST")
+    try:
+        with open(latest) as fh:
+            name = fh.read().strip()
+    except OSError:
+        return None
+    if name.startswith("step-"):
+        return int(name[5:])
+    return None
+
+
+def _die_with_parent() -> None:
+    """Child processes end when the pipeline does, even on SIGKILL (Linux prctl), so that a
+    resumed pipeline never races an orphaned specialist for its run folder."""
+    try:
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except OSError:
+        pass
+
+
+def _ernest(args: list[str], log_path: str | None = None) -> subprocess.Popen:
+    cmd = [sys.executable, "-m", "ernest_cpp.cli", *args]
+    out = open(log_path, "a") if log_path else None
+    try:
+        return subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT if out else None,
+                                preexec_fn=_die_with_parent)
+    finally:
+        if out:
+            out.close()
+
+
+def _run(args: list[str], what: str, log_path: str | None = None) -> None:
+    p = _ernest(args, log_path)
+    rc = p.wait()
+    if rc != 0:
+        where = f" (log: {log_path})" if log_path else ""
+        raise RuntimeError(f"{what} failed with exit code {rc}{where}")
+
+
+def _progress_line(name: str, run_dir: str, total: int) -> str:
+    try:
+        with open(os.path.join(run_dir, "progress.json")) as fh:
+            p = json.load(fh)
+    except (OSError, ValueError):
+        return f"{name}: starting"
+    ev = p.get("last_eval") or {}
+    prog = f", eval progress {ev['path_progress']:.2f} m" if "path_progress" in ev else ""
+    return (f"{name}: {p['step']}/{total} transitions ({100 * p['step'] / total:.0f} %), "
+            f"{p['transitions_per_s']:.1f} transitions/s, {p['updates_per_s']:.1f} updates/s, "
+            f"{p['elapsed_s'] / 60:.1f} min{prog}")
+
+
+def run_specialists(cfg: dict, log=print) -> list[str]:
+    out, preset = cfg["out"], cfg["preset"]
+    todo, dirs = [], []
+    for name, s in cfg["specialists"].items():
+        run_dir = os.path.join(out, name)
+        dirs.append(run_dir)
+        done_step = _checkpoint_step(run_dir)
+        if done_step is not None and done_step >= s["steps"]:
+            log(f"specialist {name}: done ({done_step} transitions)")
+            continue
+        todo.append((name, s, run_dir, done_step))
+    running: dict[str, tuple] = {}
+    t_last = 0.0
+    while todo or running:
+        while todo and len(running) < cfg["parallel"]:
+            name, s, run_dir, done_step = todo.pop(0)
+            args = ["train", "--scenario", s["scenario"], "--preset", preset, "--steps",
+                    str(s["steps"]), "--run-dir", run_dir, "--set", "log.progress_bar=false"]
+            for a in s["set"]:
+                args += ["--set", str(a)]
+            if done_step is not None:
+                args.append("--resume")
+                args = [a for a in args if a not in ("--preset", preset)]
+            log(f"specialist {name}: {'resuming at ' + str(done_step) if done_step else 'start'}"
+                f" ({s['steps']} transitions, log {run_dir}.log)")
+            os.makedirs(out, exist_ok=True)
+            running[name] = (_ernest(args, run_dir + ".log"), run_dir, s["steps"])
+        time.sleep(1.0)
+        for name in list(running):
+            proc, run_dir, total = running[name]
+            rc = proc.poll()
+            if rc is None:
+                continue
+            del running[name]
+            if rc != 0:
+                for p, _, _ in running.values():
+                    p.terminate()
+                raise RuntimeError(f"specialist {name} failed with exit code {rc} "
+                                   f"(log: {run_dir}.log)")
+            log(f"specialist {name}: done; {_progress_line(name, run_dir, total)}")
+        if running and time.monotonic() - t_last >= cfg["progress_every"]:
+            t_last = time.monotonic()
+            for name, (_, run_dir, total) in running.items():
+                log("  " + _progress_line(name, run_dir, total))
+    return dirs
+
+
+def _export(cfg: dict, consolidated: str) -> None:
+    policy = cfg["policy"]
+    tmp = policy + ".tmp.pt"
+    _run(["export", consolidated, "--out", tmp], "export")
+    _run(["stamp-policy", tmp], "stamp-policy")
+    os.replace(tmp, policy)
+
+
+def run_pipeline(cfg: dict, stages=STAGES, log=print) -> None:
+    out = cfg["out"]
+    t0 = time.monotonic()
+    dirs = [os.path.join(out, n) for n in cfg["specialists"]]
+    if "specialists" in stages:
+        log(f"[1/5] specialists: {', '.join(cfg['specialists'])}, {cfg['parallel']} at a time")
+        dirs = run_specialists(cfg, log)
+    consolidated = os.path.join(out, "consolidated")
+    if "consolidate" in stages:
+        if os.path.exists(os.path.join(consolidated, "checkpoints", "LATEST")):
+            log("[2/5] consolidate: done")
+        else:
+            log("[2/5] consolidate (seed 004 §4.6, Table 4)")
+            args = ["consolidate", *dirs, "--out", consolidated, "--preset", cfg["preset"],
+                    "--set", "log.progress_bar=false"]
+            for a in cfg["consolidate"].get("set", []):
+                args += ["--set", str(a)]
+            _run(args, "consolidation", consolidated + ".log")
+    if "export" in stages:
+        log(f"[3/5] export -> {cfg['policy']}")
+        _export(cfg, consolidated)
+    if "evaluate" in stages:
+        ev = cfg["evaluate"]
+        log(f"[4/5] evaluate: ernest reproduce over {ev['seeds']} seeds -> {out}/reproduce")
+        _run(["reproduce", "--policy", cfg["policy"], "--seeds", str(ev["seeds"]),
+              "--sections", str(ev["sections"]), "--out", os.path.join(out, "reproduce")],
+             "evaluation", os.path.join(out, "reproduce.log"))
+    if "report" in stages:
+        from .training_report import write_report
+
+        path = write_report(cfg, out)
+        log(f"[5/5] report -> {path}")
+    log(f"train-default: finished in {(time.monotonic() - t0) / 60:.1f} min")
+
+
+def _command(args) -> int:
+    from .commands import _passive_openmp
+
+    _passive_openmp()
+    cfg = load_pipeline(args.config)
+    if args.out:
+        cfg["out"] = args.out
+    if args.policy:
+        cfg["policy"] = args.policy
+    stages = STAGES
+    if args.stages:
+        stages = tuple(s.strip() for s in args.stages.split(","))
+        bad = sorted(set(stages) - set(STAGES))
+        if bad:
+            raise ValueError(f"--stages: unknown {', '.join(bad)}; choose from {', '.join(STAGES)}")
+    try:
+        run_pipeline(cfg, stages)
+    except RuntimeError as exc:
+        print(f"ernest train-default: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("train-default", help="train the default policy from scratch: "
+                       "specialists, consolidation, export, evaluation (resumable)",
+                       description=__doc__.split("\n\n")[0] + " Run it again to resume.")
+    p.add_argument("--config", default=DEFAULT_FILE, help=f"pipeline file (default {DEFAULT_FILE})")
+    p.add_argument("--out", help="run folder (default: the pipeline file's out)")
+    p.add_argument("--policy", help="where the exported policy goes (default: the file's policy)")
+    p.add_argument("--stages", help=f"comma-separated subset of {','.join(STAGES)}")
+    p.set_defaults(func=_command)
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(prog="ernest")
+    add_parser(parser.add_subparsers(dest="command", required=True))
+    a = parser.parse_args()
+    sys.exit(a.func(a))

@@ -1,0 +1,91 @@
+"""The report of a ``ernest train-default`` run: each specialist's learning curve against wall time
+(``curves.png``) and ``training.md`` with the curves' tables, the consolidated policy against every
+specialist (``consolidated/evaluation.csv``) and the reproduce findings of the exported policy."""
+
+from __future__ import annotations
+
+import csv
+import os
+
+
+def _rows(path: str) -> list[dict]:
+    try:
+        with open(path, newline="") as fh:
+            return [{k: _num(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+    except OSError:
+        return []
+
+
+def _num(v):
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return v
+
+
+def _fmt(v, digits=2) -> str:
+    return f"{v:.{digits}f}" if isinstance(v, float) else str(v)
+
+
+def plot_curves(curves: dict, path: str) -> str | None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if not any(curves.values()):
+        return None
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    for name, rows in curves.items():
+        rows = [r for r in rows if isinstance(r.get("elapsed_s"), float)]
+        if not rows:
+            continue
+        t = [r["elapsed_s"] / 60.0 for r in rows]
+        axes[0].plot(t, [r.get("path_progress", float("nan")) for r in rows], "o-", label=name)
+        axes[1].plot(t, [r.get("return", float("nan")) for r in rows], "o-", label=name)
+    axes[0].set_ylabel("evaluation progress along the path [m]")
+    axes[1].set_ylabel("evaluation return")
+    for ax in axes:
+        ax.set_xlabel("wall time [min]")
+        ax.grid(alpha=0.3)
+        ax.legend()
+    fig.suptitle("Specialists' learning curves (deterministic policy, evaluation seeds)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def write_report(cfg: dict, out: str) -> str:
+    curves = {name: _rows(os.path.join(out, name, "eval.csv")) for name in cfg["specialists"]}
+    png = plot_curves(curves, os.path.join(out, "curves.png"))
+    md = ["# Default policy training", "", f"Pipeline: `ernest train-default` ({out}).", ""]
+    if png:
+        md += ["![learning curves](curves.png)", ""]
+    for name, rows in curves.items():
+        md += [f"## Specialist {name} ({cfg['specialists'][name]['scenario']})", "",
+               "| transitions | wall time [min] | return | progress [m] | travel reduction |",
+               "|---|---|---|---|---|"]
+        for r in rows:
+            md.append(f"| {int(r['step'])} | {_fmt(r.get('elapsed_s', 0.0) / 60.0, 1)} | "
+                      f"{_fmt(r.get('return'), 1)} | {_fmt(r.get('path_progress'))} | "
+                      f"{_fmt(r.get('episode_metrics.travel_reduction'))} |")
+        md.append("")
+    table = _rows(os.path.join(out, "consolidated", "evaluation.csv"))
+    if table:
+        md += ["## Consolidated policy against every specialist", "",
+               "| environment | policy | return | progress [m] | travel reduction |",
+               "|---|---|---|---|---|"]
+        for r in sorted(table, key=lambda r: (r["env"], r["policy"] != "consolidated")):
+            md.append(f"| {r['env']} | {r['policy']} | {_fmt(r.get('return'), 1)} | "
+                      f"{_fmt(r.get('path_progress'))} | "
+                      f"{_fmt(r.get('episode_metrics.travel_reduction'))} |")
+        md.append("")
+    rep = os.path.join(out, "reproduce", "report.md")
+    if os.path.exists(rep):
+        md += ["## Evaluation of the exported policy", "", f"See `{rep}`.", ""]
+    path = os.path.join(out, "training.md")
+    with open(path + ".tmp", "w") as fh:
+        fh.write("\n".join(md))
+    os.replace(path + ".tmp", path)
+    return path
