@@ -32,16 +32,16 @@ _WHEEL_RADIUS = 0.17  # seed 004 Table 1: wheel diameter 0.34 m
 #: Phases of the step climb: (duration [s], gimbal yaw [deg], gimbal roll [deg], speed [m/s]).
 #: Phase 0 (the approach) lasts until the trigger; its duration is unused.
 STEP_CLIMB_PHASES: tuple[tuple[float, float, float, float], ...] = (
-    (0.00, -35.01, 0.00, 0.200),   # approach, left front wheel ahead
-    (4.47, -41.54, 24.47, 0.017),  # lift and unload the left front wheel at the face
-    (2.24, -15.19, 20.34, 0.180),  # drive it over the edge
-    (2.93, 18.01, -14.52, 0.028),  # swing the right front wheel ahead, roll the other way
-    (3.33, 19.89, -14.87, 0.057),  # lift it at the face
-    (2.26, 18.69, -19.43, 0.151),  # and drive it up
-    (6.87, 9.52, 27.34, 0.173),    # roll to the stop: tips the chassis, one rear wheel climbs
-    (7.97, 7.39, -28.57, 0.183),   # the other rear wheel on full drive, roll the other way
+    (0.00, -41.48, 0.00, 0.200),   # approach, left front wheel ahead
+    (5.30, -35.65, 25.42, 0.018),  # lift and unload the left front wheel at the face
+    (2.52, -21.32, 21.21, 0.153),  # drive it over the edge
+    (2.02, 23.21, -5.01, 0.032),   # swing the right front wheel ahead, roll the other way
+    (2.59, 19.87, -11.32, 0.016),  # lift it at the face
+    (3.22, 25.06, -12.16, 0.169),  # and drive it up
+    (5.86, 19.86, 29.18, 0.168),   # roll to the stop: tips the chassis, one rear wheel climbs
+    (7.97, 6.36, -29.36, 0.198),   # the other rear wheel on full drive, roll the other way
 )
-STEP_CLIMB_TRIGGER = 0.119  # [m] leading front wheel to the face when phase 1 starts
+STEP_CLIMB_TRIGGER = 0.127  # [m] leading front wheel to the face when phase 1 starts
 
 
 def _along_path(env, points: np.ndarray) -> np.ndarray:
