@@ -5,7 +5,7 @@ any behaviour policy) and they show what the physics allows on the wheel-high st
 :class:`PhaseGait` is a sequence of timed phases, each a target gimbal yaw and roll and a forward
 speed. The joints are driven towards each phase's targets by a proportional rate command clipped
 to the §4.2 action limits (the actions a policy could give). The first phase is held until the
-leading front wheel is within ``trigger`` of the obstacle's face, measured along the path from the
+leading front (or rear) wheel is within ``trigger`` of the obstacle's face, measured along the path from the
 simulator's ground truth (a privileged signal: a demonstrator may see what a policy cannot). After
 the last phase the rover drives on at full speed and, once its rear wheels are over, steers back
 to its path.
@@ -75,12 +75,14 @@ class PhaseGait:
     rear wheels are past the face, the yaw target steers back to the path (a positive gimbal yaw
     turns left); before that the gimbal is held centred (steering while a rear wheel climbs
     spoils the climb: measured, the tuned step climb then leaves both rear wheels below);
-    ``max_approach`` [s]: the approach ends after this long even without the trigger.
+    ``max_approach`` [s]: the approach ends after this long even without the trigger;
+    ``trigger_wheels``: ``front`` (the step: the front wheels climb first) or ``rear`` (the
+    Bickler trap: the front wheels roll over the rocks, the rear wheels are the ones to lift).
     """
 
     def __init__(self, phases, trigger: float, k_joint: float = 1.8, k_heading: float = 0.8,
                  k_lateral: float = 0.3, max_steer_deg: float = 30.0, max_approach: float = 20.0,
-                 dt: float = POLICY_DT):
+                 trigger_wheels: str = "front", dt: float = POLICY_DT):
         phases = [tuple(float(v) for v in p) for p in phases]
         if not phases or any(len(p) != 4 for p in phases):
             raise ValueError("phases must be a non-empty list of (duration, yaw, roll, speed)")
@@ -95,6 +97,9 @@ class PhaseGait:
         self.phases, self.trigger, self.k_joint = phases, trigger, k_joint
         self.k_heading, self.k_lateral = k_heading, k_lateral
         self.max_steer = math.radians(max_steer_deg)
+        if trigger_wheels not in ("front", "rear"):
+            raise ValueError(f"trigger_wheels = {trigger_wheels!r}; choose front or rear")
+        self.trigger_wheels = slice(0, 2) if trigger_wheels == "front" else slice(2, 4)
         self.max_approach, self.dt = max_approach, dt
         self.reset()
 
@@ -107,7 +112,7 @@ class PhaseGait:
         phase clock by one period."""
         if self.phase == 0:
             wheels = np.asarray(env.core.state.wheel_position)
-            lead = float(np.max(_along_path(env, wheels[:2])))
+            lead = float(np.max(_along_path(env, wheels[self.trigger_wheels])))
             if lead + _WHEEL_RADIUS > obstacle_face(env) - self.trigger or \
                     self.t >= self.max_approach:
                 self.phase, self.t_phase = 1, 0.0  # from the next period on
