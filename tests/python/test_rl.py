@@ -349,7 +349,7 @@ def test_resume_gives_the_same_updates(tmp_path):
     with pytest.raises(ValueError, match="--resume"):
         Trainer(cfg, str(tmp_path / "part"))
     with open(tmp_path / "part" / "eval.csv", "a") as fh:  # as if killed after a later evaluation
-        fh.write("10,-1,-1,0,600\n")
+        fh.write("9.5,10,-1,-1,0,600\n10,-1")  # and a row cut short by the kill
     resumed = Trainer(cfg, str(tmp_path / "part"), resume=True)
     assert resumed.step == 400
     resumed.train()

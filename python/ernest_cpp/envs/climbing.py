@@ -14,7 +14,7 @@ to its path.
 Figs 19–20 describe: the front wheels climb one at a time (yaw puts one ahead, roll lifts it and
 unloads it while it is driven over the edge), then the roll is driven towards its stop to tip the
 chassis so that one rear wheel climbs while the other follows on full drive torque. Its defaults
-were tuned by CMA-ES on ``ernest/WheelStep-v0`` (``benchmarks/tune_step_gait.py``).
+were tuned by CMA-ES on ``ernest/WheelStep-v0`` (``benchmarks/tune_gait.py step``).
 """
 
 from __future__ import annotations
@@ -42,6 +42,18 @@ STEP_CLIMB_PHASES: tuple[tuple[float, float, float, float], ...] = (
     (7.97, 6.36, -29.36, 0.198),   # the other rear wheel on full drive, roll the other way
 )
 STEP_CLIMB_TRIGGER = 0.127  # [m] leading front wheel to the face when phase 1 starts
+
+
+#: Phases of the Bickler-trap crossing (§5.2, Fig. 18), after the rear wheels reach the rocks:
+#: the roll tips the chassis so one rear wheel climbs, then the other.
+BICKLER_PHASES: tuple[tuple[float, float, float, float], ...] = (
+    (0.00, 0.00, 0.00, 0.200),
+    (3.00, 0.00, 29.00, 0.200),
+    (4.00, 0.00, -29.00, 0.200),
+    (3.00, 0.00, 29.00, 0.200),
+    (3.00, 0.00, 0.00, 0.200),
+)
+BICKLER_TRIGGER = 0.05  # [m] leading rear wheel to the rocks when phase 1 starts
 
 
 def _along_path(env, points: np.ndarray) -> np.ndarray:
@@ -150,6 +162,15 @@ class PhaseGait:
         roll_rate = np.clip(self.k_joint * (roll - s.gimbal_roll), -_LIM.roll_rate_max,
                             _LIM.roll_rate_max)
         return _to_action(v, float(yaw_rate), float(roll_rate))
+
+
+class BicklerCrossController(PhaseGait):
+    """The Bickler-trap crossing of §5.2 as a scripted phase gait: the front wheels roll over the
+    rocks, then the roll lifts the rear wheels over one at a time."""
+
+    def __init__(self, phases=BICKLER_PHASES, trigger: float = BICKLER_TRIGGER, **kw):
+        kw.setdefault("trigger_wheels", "rear")
+        super().__init__(phases, trigger, **kw)
 
 
 class StepClimbController(PhaseGait):

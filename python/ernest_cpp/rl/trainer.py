@@ -204,7 +204,14 @@ class Trainer:
         col = lines[0].split(",").index("step") if "step" in lines[0].split(",") else None
         if col is None:
             return
-        keep = [lines[0]] + [ln for ln in lines[1:] if float(ln.split(",")[col]) <= self.step]
+        def before(ln: str) -> bool:  # a partial row of a writer killed mid-line goes too
+            cells = ln.split(",")
+            try:
+                return len(cells) == len(lines[0].split(",")) and float(cells[col]) <= self.step
+            except ValueError:
+                return False
+
+        keep = [lines[0]] + [ln for ln in lines[1:] if before(ln)]
         with open(path + ".tmp", "w") as fh:
             fh.write("\n".join(keep) + "\n")
         os.replace(path + ".tmp", path)
