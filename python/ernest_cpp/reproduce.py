@@ -648,6 +648,10 @@ def run(args: argparse.Namespace) -> int:
                "episodes (wheels over: one count per seed).", ""]
         md += findings_table(rows) + [""]
         all_rows += rows
+        pngs.append(_plot_climb(ctrls, seeds[0], args.out))
+        md += ["Seed 004 Figs 19–20 for our controllers on the wheel-high step (seed "
+               f"{seeds[0]}): wheel heights, gimbal angles and torques.", "",
+               f"![Figs 19-20]({os.path.basename(pngs[-1])})", ""]
         log(f"      obstacles done in {time.perf_counter() - t0:.1f} s")
     if "rig" in sections:
         t0 = time.perf_counter()
@@ -686,6 +690,18 @@ def run(args: argparse.Namespace) -> int:
     log(f"{n_hold} hold, {n_not} do not, {len(all_rows) - n_hold - n_not} n/a; wrote {report} "
         f"({time.perf_counter() - t_start:.0f} s)")
     return 0
+
+
+def _plot_climb(ctrls: dict, seed: int, out: str) -> str:
+    """Figs 19–20 (``climb_plot``) for the learned policy, if any, and the scripted step climb."""
+    from .climb_plot import climb_trace, plot_climb
+    from .envs.climbing import StepClimbController
+
+    traces = {}
+    if LEARNED in ctrls:
+        traces[LEARNED] = climb_trace(ctrls[LEARNED][0], seed)
+    traces["scripted step climb"] = climb_trace(StepClimbController(), seed)
+    return plot_climb(traces, os.path.join(out, "fig19_20_step_climb.png"))
 
 
 DEFAULT_POLICY = os.path.join("policies", "ernest_default.pt")
