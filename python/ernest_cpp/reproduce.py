@@ -648,7 +648,7 @@ def run(args: argparse.Namespace) -> int:
                "episodes (wheels over: one count per seed).", ""]
         md += findings_table(rows) + [""]
         all_rows += rows
-        pngs.append(_plot_climb(ctrls, seeds[0], args.out))
+        pngs.append(_plot_climb(ctrls, seeds[0], args.episode_length, args.out))
         md += ["Seed 004 Figs 19–20 for our controllers on the wheel-high step (seed "
                f"{seeds[0]}): wheel heights, gimbal angles and torques.", "",
                f"![Figs 19-20]({os.path.basename(pngs[-1])})", ""]
@@ -692,15 +692,17 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _plot_climb(ctrls: dict, seed: int, out: str) -> str:
-    """Figs 19–20 (``climb_plot``) for the learned policy, if any, and the scripted step climb."""
+def _plot_climb(ctrls: dict, seed: int, episode_length: float, out: str) -> str:
+    """Figs 19–20 (``climb_plot``) for the learned policy, if any, and the scripted step climb
+    (``episode_length`` 0: the course's own)."""
     from .climb_plot import climb_trace, plot_climb
     from .envs.climbing import StepClimbController
 
+    kw = {"episode_length": episode_length} if episode_length else {}
     traces = {}
     if LEARNED in ctrls:
-        traces[LEARNED] = climb_trace(ctrls[LEARNED][0], seed)
-    traces["scripted step climb"] = climb_trace(StepClimbController(), seed)
+        traces[LEARNED] = climb_trace(ctrls[LEARNED][0], seed, kw)
+    traces["scripted step climb"] = climb_trace(StepClimbController(), seed, kw)
     return plot_climb(traces, os.path.join(out, "fig19_20_step_climb.png"))
 
 

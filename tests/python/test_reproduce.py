@@ -144,7 +144,7 @@ def test_reproduce_command_writes_the_report_cheaply(tmp_path, capsys, monkeypat
     assert "| dry (m90) | passive bogie | 81.9 |" in text
     assert "| wet (wet_sand) | learned policy | 30.0 | not run |" in text
     assert "stub statement" in text and "stub reason" in text
-    for name in ("table6.png", "rig.png", "fig8_duration.png"):
+    for name in ("table6.png", "rig.png", "fig8_duration.png", "fig19_20_step_climb.png"):
         assert (out / name).stat().st_size > 1000
     assert not list(out.glob("*.tmp*"))
     log = capsys.readouterr().out
