@@ -253,6 +253,29 @@ def wheels_over(course: str, env) -> int:
     return int(np.sum(on_top))
 
 
+def front_wheels_back(env, duration: float = 20.0, speed: float = 0.2) -> int:
+    """Seed 004 §5.2's reverse test, after an episode on the Bickler trap: drive the episode's
+    simulator backwards at ``speed`` [m/s] for ``duration`` [s] as the passive bogie (gimbal
+    off, clutch open; wheel speeds from the synchroniser, refreshed at the environment's
+    ``sync_rate``) and return how many front wheels end with their centres before the near edge
+    of the rocks: 0 = they could not climb back, the rover is trapped (Fig. 17b). The
+    environment's action has V_x in [0, 0.2] m/s only, hence its simulator (``core.sim``)."""
+    from . import dynamics as D
+
+    if duration < 0 or not 0 < speed <= 0.2:
+        raise ValueError(f"duration = {duration} must be >= 0 and speed = {speed} in (0, 0.2] m/s")
+    sim = env.core.sim
+    dt = sim.options.dt
+    every = max(1, round(1.0 / (env.options.sync_rate * dt)))
+    for k in range(int(round(duration / dt))):
+        if k % every == 0:
+            sim.set_commands(D.sync_commands(sim, -speed, gimbal_enabled=False,
+                                             clutch_engage=False))
+        sim.step()
+    near = float(min(o[0] - 0.5 * o[3] for o in np.asarray(env.scenario.obstacles)))
+    return int(np.sum(np.asarray(sim.state.wheel_position)[:2, 0] < near))
+
+
 def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float,
                   log: Callable[[str], None]) -> dict:
     from . import evaluate as ev
@@ -265,6 +288,8 @@ def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float,
             counts = [wheels_over(course, x["env"]) for x in r["runs"]]
             r["wheels_over"] = counts
             r["crossed"] = 2 * sum(c == 4 for c in counts) >= len(counts)  # in most episodes
+            if course == "bickler" and passive:  # Fig. 17b: then reverse
+                r["front_back"] = [front_wheels_back(x["env"]) for x in r["runs"]]
             out[(course, name)] = r
     return out
 
@@ -281,6 +306,15 @@ def obstacle_findings(res: dict) -> list[dict]:
                      "paper": "front wheels pass, rear wheels do not (§5.2, Fig. 17)",
                      "ours": f"wheels over {'/'.join(str(c) for c in r['wheels_over'])} of 4",
                      "holds": front})
+        if "front_back" in r:  # the reverse test (front_wheels_back)
+            trapped = [c == 2 and b == 0 for c, b in zip(r["wheels_over"], r["front_back"])]
+            rows.append({"id": "004.s5.bickler.passive_reverse", "statement": "Bickler trap: "
+                         "straddling, the passive bogie cannot reverse out (its front wheels do "
+                         "not climb back)", "paper": "front wheels cannot clear the obstacle "
+                         "again when reversing (§5.2, Fig. 17b)",
+                         "ours": "front wheels back after 20 s reversing: "
+                                 f"{'/'.join(str(b) for b in r['front_back'])} of 2",
+                         "holds": 2 * sum(trapped) >= len(trapped)})
     for (course, name), (paper_crossed, paper_text) in PAPER_OBSTACLES.items():
         r = res.get((course, name))
         ours = None if r is None else r["crossed"]
