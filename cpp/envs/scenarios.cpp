@@ -322,9 +322,14 @@ Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
       break;
     }
     case ScenarioKind::BicklerTrap: {
-      // §5.2: a continuous row of rocks across the path that the rover can straddle (depth along
-      // the path less than the 0.86 m wheelbase), 3 m wide, six 0.5 m rocks whose tops differ by
-      // up to +-5 mm. Height and depth: ScenarioOptions::bickler_height, bickler_depth.
+      // Seed 004 §5.2: a continuous row of rocks across the path that the rover can straddle
+      // (depth along the path less than the 0.86 m wheelbase), 3 m wide, six 0.5 m rocks whose
+      // tops differ by up to +-5 mm. Height and depth: ScenarioOptions::bickler_height and
+      // bickler_depth, by default 0.09 m x 0.3 m, chosen with benchmarks/bench_bickler_scan.py
+      // (height x friction x ground): on dry sand, the ground ernest/BicklerTrap-v0 registers,
+      // 0.07-0.11 m rows give Fig. 17's passive outcome (front wheels over, rear wheels not,
+      // no reversing out) at every friction of Table 3; 0.09 m is the middle. M90, wet sand and
+      // rigid ground have no such height (benchmarks/RESULTS.md, "Bickler trap").
       const double h = options.bickler_height, d = options.bickler_depth;
       for (int i = 0; i < 6; ++i) {
         const double y = -1.25 + 0.5 * i;

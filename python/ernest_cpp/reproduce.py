@@ -44,15 +44,6 @@ REASONS: dict[str, str] = {
                            "specialist, not converged, policies/TRAINING.md): it gets the front "
                            "wheels up the 0.34 m step (2 of 4 over in every seed) but not the "
                            "rear ones; the same at dt / 4",
-    "004.s5.bickler.learned": "the default policy, retrained on the 0.0125 s simulator with the "
-                              "quick preset (30 000 transitions per specialist, policies/"
-                              "TRAINING.md), gets 2-4 wheels over in seeds 0-2; the previous "
-                              "default (same commands, session-5 simulator, git 7ebfa9c) crosses "
-                              "on this simulator (seed 0: 10.54 m): short runs, high variance",
-    "004.s5.bickler.passive_straddles": "the trap's boxes stand 0.20 m, above the 0.17 m wheel "
-                                        "radius: our front wheels stall against their faces "
-                                        "(measured: 0 wheels over, 0.85 m progress in 60 s), "
-                                        "none gets on top to straddle",
 }
 
 #: What a missing reason says (the row id tells which key of ``REASONS`` to fill).
@@ -676,7 +667,8 @@ def run(args: argparse.Namespace) -> int:
         res = run_obstacles(ctrls, seeds, args.episode_length, log)
         rows = obstacle_findings(res)
         md += ["## 2. Seed 004 §5.2–5.3: Bickler trap and wheel-high step", "",
-               "`ernest/BicklerTrap-v0` (a row of 0.2 m rocks the rover straddles), "
+               "`ernest/BicklerTrap-v0` (a row of 0.09 m rocks, 0.3 m deep, on dry sand, that "
+               "the rover straddles; the passive bogie then reverses for 20 s), "
                "`ernest/WheelStep-v0` (a 0.34 m step). Crossed = all four wheel centres past the "
                "rocks' far edge / on top of the step at the end of the episode, in most of the "
                "episodes (wheels over: one count per seed).", ""]
