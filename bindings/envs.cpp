@@ -76,6 +76,14 @@ void bind_envs(py::module_& m) {
                      "(min, max) [deg]")
       .def_readwrite("ripple_amplitude_range", &ScenarioOptions::ripple_amplitude_range,
                      "(min, max) [m]")
+      .def_readwrite("bickler_height", &ScenarioOptions::bickler_height,
+                     "Bickler trap: height of the row of rocks [m], 0.02..0.5")
+      .def_readwrite("bickler_depth", &ScenarioOptions::bickler_depth,
+                     "Bickler trap: depth of the row along the path [m], 0.05..0.6 (less than the "
+                     "0.86 m wheelbase: the rover straddles it)")
+      .def_readwrite("obstacle_friction", &ScenarioOptions::obstacle_friction,
+                     "Coulomb friction of the obstacles and rigid ground; <= 0 (default) draws it "
+                     "from Table 3's [0.5, 0.9] each trial, > 0 (at most 2) fixes it")
       .def("validate", &ScenarioOptions::validate, "Raise ValueError on an invalid field.");
 
   py::class_<RippleSpec>(m, "RippleSpec", "One ripple of eq 39.")
@@ -191,6 +199,12 @@ void bind_envs(py::module_& m) {
       .def_property_readonly("fts", &RoverEnv::fts, "last processed force–torque values (4 x 6)")
       .def_property_readonly("fts_bias", &RoverEnv::fts_bias)
       .def_property_readonly("current_action", &RoverEnv::current_action)
+      .def_property_readonly("sim", [](const RoverEnv& e) {
+        if (!e.shared_sim()) throw std::logic_error("RoverEnv: call reset() first");
+        return e.shared_sim();
+      }, "the episode's dynamics.RoverSim (shared): command and step it directly, e.g. with "
+         "dynamics.sync_commands to drive backwards (the action's V_x is 0..0.2 m/s); after the "
+         "next reset() it is a detached simulator of the old episode")
       .def_property_readonly("state", [](const RoverEnv& e) { return e.sim().state_copy(); },
                              "ground truth of the rover: dynamics.RoverState (a copy), the type "
                              "RoverSim.state gives");

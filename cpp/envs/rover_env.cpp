@@ -133,7 +133,7 @@ sensing::ObservationVector RoverEnv::start_episode(std::uint64_t seed) {
   so.friction = scenario_->friction;
   sim_.reset();
   heights_.reset();
-  sim_ = std::make_unique<dynamics::RoverSim>(params_, scenario_->terrain, scenario_->obstacles, so);
+  sim_ = std::make_shared<dynamics::RoverSim>(params_, scenario_->terrain, scenario_->obstacles, so);
   sim_->reset(scenario_->start_x, scenario_->start_y, scenario_->start_heading, 0.0, 0.0,
               options_.start_speed);
   heights_ = std::make_unique<TerrainHeightSource>(scenario_->terrain, scenario_->obstacles);

@@ -103,6 +103,10 @@ class RoverEnv {
   const Scenario& scenario() const;
   const dynamics::RoverSim& sim() const;
   dynamics::RoverSim& sim();
+  /// The current episode's simulator, shared: a holder may command and step it directly (e.g.
+  /// drive backwards, outside the action's V_x range); after the next reset() it is a detached
+  /// simulator of the old episode, still valid. Null before the first reset().
+  std::shared_ptr<dynamics::RoverSim> shared_sim() const { return sim_; }
   const EpisodeMetrics& metrics() const { return metrics_; }
   const EnvOptions& options() const { return options_; }
   const dynamics::RoverParameters& parameters() const { return params_; }
@@ -129,7 +133,7 @@ class RoverEnv {
   EnvOptions options_;
   dynamics::SimOptions sim_options_;
   std::unique_ptr<Scenario> scenario_;
-  std::unique_ptr<dynamics::RoverSim> sim_;
+  std::shared_ptr<dynamics::RoverSim> sim_;
   std::unique_ptr<TerrainHeightSource> heights_;
   std::unique_ptr<perception::StereoMapper> mapper_;
   sensing::FtsProcessor fts_filter_;

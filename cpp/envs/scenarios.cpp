@@ -120,6 +120,10 @@ void ScenarioOptions::validate() const {
   require_in_range(o, "slope_angle_range_deg[1]", slope_angle_range_deg[1], slope_angle_range_deg[0], 40.0);
   require_in_range(o, "ripple_amplitude_range[0]", ripple_amplitude_range[0], 0.0, 1.0);
   require_in_range(o, "ripple_amplitude_range[1]", ripple_amplitude_range[1], ripple_amplitude_range[0], 1.0);
+  require_in_range(o, "bickler_height", bickler_height, 0.02, 0.5);
+  // straddled: the front wheels (0.34 m) must fit beyond the rocks while the rear ones are before
+  require_in_range(o, "bickler_depth", bickler_depth, 0.05, 0.6);
+  require_in_range(o, "obstacle_friction", obstacle_friction, -kInf, 2.0);  // <= 0: drawn
 }
 
 double ripple_height(double x, double a, double lambda, double alpha) {
@@ -275,7 +279,8 @@ Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
     s.slope_start = s_start;
     slope_height(0.0, s_start, s_angle, s_bs, s_be, s_len, &s.peak_slope, &s.slope_direct);
   }
-  s.friction = rng.uniform(0.5, 0.9);  // Table 3 contacts
+  s.friction = rng.uniform(0.5, 0.9);  // Table 3 contacts (drawn always: same later draws)
+  if (options.obstacle_friction > 0.0) s.friction = options.obstacle_friction;
   place_path(s, e, heading, lateral, yaw);
 
   switch (kind) {
@@ -317,11 +322,18 @@ Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
       break;
     }
     case ScenarioKind::BicklerTrap: {
-      // §5.2: a continuous row of rocks across the path that the rover can straddle: 0.3 m deep
-      // (less than the 0.86 m wheelbase), 0.2 m high (steep for a 0.34 m wheel), 3 m wide.
+      // Seed 004 §5.2: a continuous row of rocks across the path that the rover can straddle
+      // (depth along the path less than the 0.86 m wheelbase), 3 m wide, six 0.5 m rocks whose
+      // tops differ by up to +-5 mm. Height and depth: ScenarioOptions::bickler_height and
+      // bickler_depth, by default 0.09 m x 0.3 m, chosen with benchmarks/bench_bickler_scan.py
+      // (height x friction x ground): on dry sand, the ground ernest/BicklerTrap-v0 registers,
+      // 0.07-0.11 m rows give Fig. 17's passive outcome (front wheels over, rear wheels not,
+      // no reversing out) at every friction of Table 3; 0.09 m is the middle. M90, wet sand and
+      // rigid ground have no such height (benchmarks/RESULTS.md, "Bickler trap").
+      const double h = options.bickler_height, d = options.bickler_depth;
       for (int i = 0; i < 6; ++i) {
         const double y = -1.25 + 0.5 * i;
-        s.obstacles.push_back(box(1.6, y, 0.0, 0.3, 0.5, 0.4 + rng.uniform(-0.01, 0.01), 0.0));
+        s.obstacles.push_back(box(1.6, y, 0.0, d, 0.5, 2.0 * h + rng.uniform(-0.01, 0.01), 0.0));
       }
       break;
     }

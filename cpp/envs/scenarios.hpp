@@ -37,6 +37,14 @@ struct ScenarioOptions {
   std::array<double, 2> step_height_range{0.2, 0.3};      ///< [m] (Table 3)
   std::array<double, 2> slope_angle_range_deg{15.0, 30.0}; ///< [deg] (Table 3)
   std::array<double, 2> ripple_amplitude_range{0.1, 0.3};  ///< [m] (Table 3)
+  /// Bickler trap (§5.2): height of the row of rocks above the ground [m] and its depth along
+  /// the path [m] (less than the 0.86 m wheelbase, so the rover straddles it). Defaults: the
+  /// course chosen with benchmarks/bench_bickler_scan.py (see scenarios.cpp).
+  double bickler_height = 0.09;
+  double bickler_depth = 0.3;
+  /// Coulomb friction of the obstacles (and of rigid ground); <= 0 draws it from Table 3's
+  /// [0.5, 0.9] each trial (the default), > 0 fixes it (scans, tests).
+  double obstacle_friction = 0.0;
   void validate() const;
 };
 

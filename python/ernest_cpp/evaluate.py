@@ -18,7 +18,7 @@ from . import envs as E
 from .envs.baselines import CrawlingGaitController, PassiveController
 
 COURSES = [  # (label, env id, kwargs)
-    ("Bickler trap (M90)", "ernest/BicklerTrap-v0", {}),
+    ("Bickler trap (dry sand)", "ernest/BicklerTrap-v0", {"soil": "dry_sand"}),
     ("20 deg slope, dry M90", "ernest/SlopeEval-v0", {"soil": "m90"}),
     ("20 deg slope, wet sand", "ernest/SlopeEval-v0", {"soil": "wet_sand"}),
     ("Wheel-high step (M90)", "ernest/WheelStep-v0", {}),

@@ -44,15 +44,6 @@ REASONS: dict[str, str] = {
                            "specialist, not converged, policies/TRAINING.md): it gets the front "
                            "wheels up the 0.34 m step (2 of 4 over in every seed) but not the "
                            "rear ones; the same at dt / 4",
-    "004.s5.bickler.learned": "the default policy, retrained on the 0.0125 s simulator with the "
-                              "quick preset (30 000 transitions per specialist, policies/"
-                              "TRAINING.md), gets 2-4 wheels over in seeds 0-2; the previous "
-                              "default (same commands, session-5 simulator, git 7ebfa9c) crosses "
-                              "on this simulator (seed 0: 10.54 m): short runs, high variance",
-    "004.s5.bickler.passive_straddles": "the trap's boxes stand 0.20 m, above the 0.17 m wheel "
-                                        "radius: our front wheels stall against their faces "
-                                        "(measured: 0 wheels over, 0.85 m progress in 60 s), "
-                                        "none gets on top to straddle",
 }
 
 #: What a missing reason says (the row id tells which key of ``REASONS`` to fill).
@@ -253,6 +244,29 @@ def wheels_over(course: str, env) -> int:
     return int(np.sum(on_top))
 
 
+def front_wheels_back(env, duration: float = 20.0, speed: float = 0.2) -> int:
+    """Seed 004 §5.2's reverse test, after an episode on the Bickler trap: drive the episode's
+    simulator backwards at ``speed`` [m/s] for ``duration`` [s] as the passive bogie (gimbal
+    off, clutch open; wheel speeds from the synchroniser, refreshed at the environment's
+    ``sync_rate``) and return how many front wheels end with their centres before the near edge
+    of the rocks: 0 = they could not climb back, the rover is trapped (Fig. 17b). The
+    environment's action has V_x in [0, 0.2] m/s only, hence its simulator (``core.sim``)."""
+    from . import dynamics as D
+
+    if duration < 0 or not 0 < speed <= 0.2:
+        raise ValueError(f"duration = {duration} must be >= 0 and speed = {speed} in (0, 0.2] m/s")
+    sim = env.core.sim
+    dt = sim.options.dt
+    every = max(1, round(1.0 / (env.options.sync_rate * dt)))
+    for k in range(int(round(duration / dt))):
+        if k % every == 0:
+            sim.set_commands(D.sync_commands(sim, -speed, gimbal_enabled=False,
+                                             clutch_engage=False))
+        sim.step()
+    near = float(min(o[0] - 0.5 * o[3] for o in np.asarray(env.scenario.obstacles)))
+    return int(np.sum(np.asarray(sim.state.wheel_position)[:2, 0] < near))
+
+
 def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float,
                   log: Callable[[str], None]) -> dict:
     from . import evaluate as ev
@@ -265,6 +279,8 @@ def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float,
             counts = [wheels_over(course, x["env"]) for x in r["runs"]]
             r["wheels_over"] = counts
             r["crossed"] = 2 * sum(c == 4 for c in counts) >= len(counts)  # in most episodes
+            if course == "bickler" and passive:  # Fig. 17b: then reverse
+                r["front_back"] = [front_wheels_back(x["env"]) for x in r["runs"]]
             out[(course, name)] = r
     return out
 
@@ -281,6 +297,15 @@ def obstacle_findings(res: dict) -> list[dict]:
                      "paper": "front wheels pass, rear wheels do not (§5.2, Fig. 17)",
                      "ours": f"wheels over {'/'.join(str(c) for c in r['wheels_over'])} of 4",
                      "holds": front})
+        if "front_back" in r:  # the reverse test (front_wheels_back)
+            trapped = [c == 2 and b == 0 for c, b in zip(r["wheels_over"], r["front_back"])]
+            rows.append({"id": "004.s5.bickler.passive_reverse", "statement": "Bickler trap: "
+                         "straddling, the passive bogie cannot reverse out (its front wheels do "
+                         "not climb back)", "paper": "front wheels cannot clear the obstacle "
+                         "again when reversing (§5.2, Fig. 17b)",
+                         "ours": "front wheels back after 20 s reversing: "
+                                 f"{'/'.join(str(b) for b in r['front_back'])} of 2",
+                         "holds": 2 * sum(trapped) >= len(trapped)})
     for (course, name), (paper_crossed, paper_text) in PAPER_OBSTACLES.items():
         r = res.get((course, name))
         ours = None if r is None else r["crossed"]
@@ -642,7 +667,8 @@ def run(args: argparse.Namespace) -> int:
         res = run_obstacles(ctrls, seeds, args.episode_length, log)
         rows = obstacle_findings(res)
         md += ["## 2. Seed 004 §5.2–5.3: Bickler trap and wheel-high step", "",
-               "`ernest/BicklerTrap-v0` (a row of 0.2 m rocks the rover straddles), "
+               "`ernest/BicklerTrap-v0` (a row of 0.09 m rocks, 0.3 m deep, on dry sand, that "
+               "the rover straddles; the passive bogie then reverses for 20 s), "
                "`ernest/WheelStep-v0` (a 0.34 m step). Crossed = all four wheel centres past the "
                "rocks' far edge / on top of the step at the end of the episode, in most of the "
                "episodes (wheels over: one count per seed).", ""]

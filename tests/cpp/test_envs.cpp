@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "ernest/envs/perlin.hpp"
 #include "ernest/envs/scenarios.hpp"
@@ -238,12 +240,15 @@ TEST(Scenarios, EvaluationCourses) {
   EXPECT_NEAR((slope.terrain.height(0.5, 0) - slope.terrain.height(-0.5, 0)), std::tan(20 * kDeg), 1e-9);
   const Scenario step = make(ScenarioKind::WheelStep, 0);
   EXPECT_DOUBLE_EQ(step.step_height, 0.34);  // wheel diameter (Table 1)
+  // §5.2's trap as chosen by benchmarks/bench_bickler_scan.py: a 0.09 m row, 0.3 m deep.
   const Scenario trap = make(ScenarioKind::BicklerTrap, 0);
   ASSERT_EQ(trap.obstacles.size(), 6u);
   for (const auto& b : trap.obstacles) {
-    EXPECT_LT(b.size.x(), 0.86);  // shorter than the wheelbase: the rover straddles it
-    EXPECT_NEAR(b.centre.z() + 0.5 * b.size.z(), 0.2, 0.011);
+    EXPECT_DOUBLE_EQ(b.size.x(), 0.3);  // shorter than the 0.86 m wheelbase: straddled
+    EXPECT_NEAR(b.centre.z() + 0.5 * b.size.z(), 0.09, 0.005 + 1e-12);
   }
+  EXPECT_GE(trap.friction, 0.5);  // drawn from Table 3 unless fixed
+  EXPECT_LE(trap.friction, 0.9);
   const Scenario course = make(ScenarioKind::Course, 0);
   EXPECT_EQ(course.ripples.size(), 3u);
   EXPECT_GT(course.obstacles.size(), 5u);
@@ -278,6 +283,44 @@ TEST(Scenarios, RandomisationRangesAreOptions) {
   sl.kind = ScenarioKind::Slope;
   sl.slope_angle_range_deg = {10.0, 10.0};
   EXPECT_NEAR(generate_scenario(sl, 3).slope_angle, 10.0 * kDeg, 1e-15);
+  ScenarioOptions bt;  // the Bickler trap's row and the obstacle friction are options
+  bt.kind = ScenarioKind::BicklerTrap;
+  bt.bickler_height = 0.2;
+  bt.bickler_depth = 0.45;
+  bt.obstacle_friction = 0.6;
+  const Scenario trap = generate_scenario(bt, 4);
+  for (const auto& b : trap.obstacles) {
+    EXPECT_DOUBLE_EQ(b.size.x(), 0.45);
+    EXPECT_NEAR(b.centre.z() + 0.5 * b.size.z(), 0.2, 0.005 + 1e-12);
+  }
+  EXPECT_EQ(trap.friction, 0.6);
+  bt.obstacle_friction = 0.0;  // drawn again, as without the option (the same draws)
+  bt.kind = ScenarioKind::RockField;
+  ScenarioOptions rf;
+  EXPECT_EQ(generate_scenario(bt, 4).friction, generate_scenario(rf, 4).friction);
+  bt.obstacle_friction = 0.8;
+  const Scenario fixed = generate_scenario(bt, 4), drawn = generate_scenario(rf, 4);
+  EXPECT_EQ(fixed.friction, 0.8);
+  ASSERT_EQ(fixed.obstacles.size(), drawn.obstacles.size());  // fixing it moves no rock
+  for (size_t i = 0; i < fixed.obstacles.size(); ++i)
+    EXPECT_EQ(fixed.obstacles[i].centre, drawn.obstacles[i].centre);
+  for (auto field : {&ScenarioOptions::bickler_height, &ScenarioOptions::bickler_depth,
+                     &ScenarioOptions::obstacle_friction}) {
+    ScenarioOptions b;
+    b.*field = 3.0;  // out of range for each: the message names the field
+    try {
+      generate_scenario(b, 0);
+      ADD_FAILURE() << "no exception";
+    } catch (const std::invalid_argument& e) {
+      const std::string name = field == &ScenarioOptions::bickler_height ? "bickler_height"
+                               : field == &ScenarioOptions::bickler_depth ? "bickler_depth"
+                                                                           : "obstacle_friction";
+      EXPECT_NE(std::string(e.what()).find("ScenarioOptions." + name), std::string::npos) << e.what();
+    }
+  }
+  ScenarioOptions deep;
+  deep.bickler_depth = 0.86;  // as deep as the wheelbase: it could not be straddled
+  EXPECT_THROW(generate_scenario(deep, 0), std::invalid_argument);
   ScenarioOptions bad;
   bad.step_height_range = {0.3, 0.2};
   EXPECT_THROW(generate_scenario(bad, 0), std::invalid_argument);

@@ -261,13 +261,20 @@ def test_wet_sand_immobilises_the_passive_bogie_while_the_crawling_gait_climbs()
         assert m_c["progress"] > 3.0 and m_c["travel_reduction"] < 0.7
 
 
-@pytest.mark.parametrize("env_id, controller, passive", [
-    ("ernest/BicklerTrap-v0", CrawlingGaitController, False),  # pushing against the boxes
-    ("ernest/BicklerTrap-v0", PassiveController, True),        # wheels spinning against a box face
-    ("ernest/Course-v0", PassiveController, True),             # rocking on the first sand ripple
-    ("ernest/SlopeEval-v0", CrawlingGaitController, False),    # lifting a wheel on the 20 deg slope
+# Rocks the front wheels cannot climb: 0.2 m on M90 (the Bickler trap's course is 0.09 m on dry
+# sand, where the crawling gait's crossing is decided by chaos: seed 0 crosses at dt / 2 and dt / 4,
+# not at dt and dt / 8).
+_WALL = {"soil": "m90", "randomisation": {"bickler_height": 0.2}}
+
+
+@pytest.mark.parametrize("env_id, controller, passive, kwargs", [
+    ("ernest/BicklerTrap-v0", CrawlingGaitController, False, _WALL),  # pushing against the boxes
+    ("ernest/BicklerTrap-v0", PassiveController, True, _WALL),  # wheels spinning against a box face
+    ("ernest/BicklerTrap-v0", PassiveController, True, {}),  # straddling: rear wheels against it
+    ("ernest/Course-v0", PassiveController, True, {}),           # rocking on the first sand ripple
+    ("ernest/SlopeEval-v0", CrawlingGaitController, False, {}),  # lifting a wheel on the 20 deg slope
 ])
-def test_evaluation_results_do_not_depend_on_the_step(env_id, controller, passive):
+def test_evaluation_results_do_not_depend_on_the_step(env_id, controller, passive, kwargs):
     # Issue 13 item 1 (benchmarks/RESULTS.md, "step independence"): travel reduction within 2 pp
     # and cost of transport within 5 % between the default step and a quarter of it. Each row
     # failed before one fix: the box contacts' force-dependent slip per collision point (ODE
@@ -278,7 +285,8 @@ def test_evaluation_results_do_not_depend_on_the_step(env_id, controller, passiv
     from ernest_cpp.evaluate import run_episode
 
     dt = SimOptions().dt
-    m = [run_episode(env_id, {"physics_dt": h}, controller(), passive, 0)[0] for h in (dt, dt / 4)]
+    m = [run_episode(env_id, {"physics_dt": h, **kwargs}, controller(), passive, 0)[0]
+         for h in (dt, dt / 4)]
     assert abs(m[0]["travel_reduction"] - m[1]["travel_reduction"]) < 0.02
     assert m[0]["progress"] > 0.5 and m[1]["progress"] > 0.5
     assert abs(m[0]["cost_of_transport"] / m[1]["cost_of_transport"] - 1) < 0.05
@@ -318,3 +326,55 @@ def test_randomisation_ranges_are_kwargs():
     assert env.unwrapped.heading_and_lateral() == (pytest.approx(0.0), pytest.approx(0.0))
     with pytest.raises(ValueError, match="range_scale"):
         E.ErnestEnv("step", randomisation={"range_scale": 3})
+
+
+def test_bickler_trap_options_are_kwargs_and_its_ground_is_registered():
+    # The course of benchmarks/RESULTS.md ("Bickler trap"): Table 2's dry sand by default.
+    assert gym.make("ernest/BicklerTrap-v0").unwrapped.options.soil == "dry_sand"
+    assert gym.make("ernest/BicklerTrap-v0", soil="m90").unwrapped.options.soil == "m90"
+    env = E.ErnestEnv("bickler", randomisation={"bickler_height": 0.15, "bickler_depth": 0.4,
+                                                "obstacle_friction": 0.55})
+    env.reset(seed=1)
+    o = np.asarray(env.scenario.obstacles)
+    np.testing.assert_allclose(o[:, 3], 0.4)
+    assert np.all(np.abs(o[:, 2] + 0.5 * o[:, 5] - 0.15) <= 0.005 + 1e-12)  # tops +-5 mm
+    assert env.scenario.friction == 0.55 and env.core.sim.friction == 0.55
+    with pytest.raises(ValueError, match="bickler_depth"):
+        E.ErnestEnv("bickler", randomisation={"bickler_depth": 0.9})  # could not be straddled
+
+
+def test_the_simulator_under_an_env_drives_backwards_and_outlives_a_reset():
+    from ernest_cpp import dynamics as D
+
+    env = E.ErnestEnv("flat", rigid_ground=True)
+    with pytest.raises(RuntimeError, match="reset"):
+        env.core.sim
+    env.reset(seed=0)
+    sim = env.core.sim
+    x0 = sim.state.position[0]
+    for _ in range(int(round(2.0 / sim.options.dt))):  # 2 s at -0.1 m/s (below the action's 0)
+        sim.set_commands(D.sync_commands(sim, -0.1, gimbal_enabled=False))
+        sim.step()
+    assert sim.state.position[0] - x0 == pytest.approx(-0.2, abs=0.02)
+    assert env.core.state.position[0] == sim.state.position[0]  # the env's own simulator
+    env.reset(seed=1)
+    assert env.core.state.position[0] == pytest.approx(x0, abs=1e-3)  # a new simulator
+    sim.step()  # the old episode's: detached, still valid
+    assert sim.state.position[0] < x0 - 0.15
+
+
+@pytest.mark.parametrize("friction", [0.5, 0.9])
+def test_passive_bogie_is_trapped_by_the_bickler_trap(friction):
+    # Seed 004 §5.2, Fig. 17, at both ends of Table 3's friction range: the front wheels pass the
+    # rocks, the rear wheels do not, and reversing, the front wheels do not climb back. The
+    # outcome is reached by 20 s (benchmarks/RESULTS.md, "Bickler trap": 60 s gives the same).
+    from ernest_cpp.evaluate import run_episode
+    from ernest_cpp.reproduce import front_wheels_back
+
+    kw = {"episode_length": 20.0, "randomisation": {"obstacle_friction": friction}}
+    _, _, env, _ = run_episode("ernest/BicklerTrap-v0", kw, PassiveController(), True, 0)
+    assert env.core.sim.friction == friction
+    far = max(o[0] + 0.5 * o[3] for o in np.asarray(env.scenario.obstacles))
+    x = np.asarray(env.core.state.wheel_position)[:, 0]
+    assert np.all(x[:2] > far) and np.all(x[2:] < far - 0.3)  # front over, rear not on the rocks
+    assert front_wheels_back(env, 10.0) == 0

@@ -163,7 +163,7 @@ def test_evaluate_fans_its_episodes_out_with_the_same_report(cluster, tmp_path, 
 
     # two short courses (2 s episodes) keep it fast; the tasks get the courses with the job
     monkeypatch.setattr(evaluate, "COURSES", [
-        ("Bickler trap (M90)", "ernest/BicklerTrap-v0", {"episode_length": 2.0}),
+        ("Bickler trap (dry sand)", "ernest/BicklerTrap-v0", {"episode_length": 2.0}),
         ("20 deg slope, dry M90", "ernest/SlopeEval-v0", {"soil": "m90", "episode_length": 2.0})])
     tables = []
     for backend in ("local", "ray"):

@@ -53,13 +53,15 @@ def test_cot_is_compared_as_energy_per_mass_and_distance():
 
 
 def test_obstacle_findings_follow_the_outcome():
-    res = {("bickler", R.PASSIVE): {"crossed": False, "wheels_over": [2], "progress": 1.0},
+    res = {("bickler", R.PASSIVE): {"crossed": False, "wheels_over": [2], "progress": 1.0,
+                                    "front_back": [0]},
            ("bickler", R.LEARNED): {"crossed": True, "wheels_over": [4], "progress": 9.0},
            ("step", R.LEARNED): {"crossed": True, "wheels_over": [4], "progress": 3.0},
            ("step", R.PASSIVE): {"crossed": False, "wheels_over": [0], "progress": 0.8}}
     rows = _by_id(R.obstacle_findings(res))
     assert rows["004.s5.bickler.passive"]["holds"] is True
     assert rows["004.s5.bickler.passive_straddles"]["holds"] is True  # 2 wheels over
+    assert rows["004.s5.bickler.passive_reverse"]["holds"] is True  # and cannot reverse out
     assert rows["004.s5.bickler.learned"]["holds"] is True
     assert rows["004.s5.step.passive"]["holds"] is None  # the paper does not report it
     res[("bickler", R.PASSIVE)] = {"crossed": True, "wheels_over": [4], "progress": 9.0}
@@ -67,6 +69,11 @@ def test_obstacle_findings_follow_the_outcome():
     rows = _by_id(R.obstacle_findings(res))
     assert rows["004.s5.bickler.passive"]["holds"] is False
     assert rows["004.s5.bickler.passive_straddles"]["holds"] is False
+    assert "004.s5.bickler.passive_reverse" not in rows  # no reverse test run
+    for over, back in (([2, 2, 0], [0, 2, 2]), ([0], [0])):  # reversed out / never straddled
+        res[("bickler", R.PASSIVE)] = {"crossed": False, "wheels_over": over, "progress": 1.0,
+                                       "front_back": back}
+        assert _by_id(R.obstacle_findings(res))["004.s5.bickler.passive_reverse"]["holds"] is False
     assert rows["004.s5.step.learned"]["holds"] is False
 
 

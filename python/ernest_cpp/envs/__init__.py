@@ -32,13 +32,21 @@ ENV_IDS = {
 }
 
 
+#: Keyword defaults of an id beyond its scenario (``gym.make`` and ``make_vec`` kwargs override
+#: them). The Bickler trap stands on Table 2's dry sand: the only ground on which its rocks give
+#: seed 004 §5.2's passive outcome at every friction of Table 3 (benchmarks/RESULTS.md, "Bickler
+#: trap").
+ENV_KWARGS = {"ernest/BicklerTrap-v0": {"soil": "dry_sand"}}
+
+
 def register_envs() -> None:
     """Register the ids above (idempotent). Runs on import of this module; gymnasium < 1.0 also
     runs it through the plugin entry point, gymnasium 1.x does not (see the module docstring)."""
     for env_id, scenario in ENV_IDS.items():
         if env_id not in gym.registry:
             gym.register(id=env_id, entry_point="ernest_cpp.envs.core:ErnestEnv",
-                         kwargs={"scenario": scenario}, disable_env_checker=True)
+                         kwargs={"scenario": scenario, **ENV_KWARGS.get(env_id, {})},
+                         disable_env_checker=True)
 
 
 register_envs()
