@@ -1,7 +1,7 @@
-"""The TD3 learner's fused form (networks.FusedTwinCritic, fused Adam, foreach soft updates) against
-the plain definition: two separate ``Critic`` modules, Adam's per-tensor loop, a per-tensor Polyak
-loop. Same initial weights -> same Q values, same gradient steps; checkpoints of either critic layout
-load; ``learner_device`` is resolved and validated."""
+"""The TD3 learner (fused Adam, one foreach soft update) against the plain definition: Adam's
+per-tensor loop and a per-tensor Polyak loop. Same seed -> same initial weights and the same gradient
+steps; checkpoints (also those saved with the per-tensor Adam) load and continue; an incompatible
+critic layout is a clear error; ``learner_device`` is resolved and validated."""
 
 from __future__ import annotations
 
@@ -14,14 +14,14 @@ import torch.nn.functional as F
 torch.set_num_threads(1)
 
 from ernest_cpp.rl import config as C  # noqa: E402
-from ernest_cpp.rl.networks import Actor, Critic, FusedTwinCritic, TwinCritic  # noqa: E402
+from ernest_cpp.rl.networks import Actor, TwinCritic  # noqa: E402
 from ernest_cpp.rl.td3 import TD3, TD3Config, resolve_device  # noqa: E402
 
 OBS, ACT = 7, 3
 
 
 class ReferenceTD3:
-    """TD3 written out plainly with two ``Critic`` modules (the update before fusing)."""
+    """TD3 written out plainly: Adam's per-tensor loop, a per-tensor Polyak loop."""
 
     def __init__(self, cfg: TD3Config, seed: int):
         self.c = cfg
@@ -63,7 +63,7 @@ class ReferenceTD3:
             info["actor_loss"] = actor_loss.item()
         return info
 
-    def state_dict(self) -> dict:  # the checkpoint layout with two separate critics
+    def state_dict(self) -> dict:  # TD3.state_dict's layout
         return {"actor": self.actor.state_dict(), "critic": self.critic.state_dict(),
                 "actor_target": self.actor_target.state_dict(),
                 "critic_target": self.critic_target.state_dict(),
@@ -87,60 +87,19 @@ def _cfg(**kw) -> TD3Config:
 
 
 def _assert_same_networks(agent: TD3, ref: ReferenceTD3, **tol):
-    for a, b in ((agent.actor, ref.actor), (agent.actor_target, ref.actor_target)):
-        for k, v in a.state_dict().items():
-            torch.testing.assert_close(v, b.state_dict()[k], **tol)
-    for a, b in ((agent.critic, ref.critic), (agent.critic_target, ref.critic_target)):
-        twin = a.twin_state_dict()
-        for k, v in b.state_dict().items():
-            torch.testing.assert_close(twin[k], v, **tol)
-
-
-# ------------------------------------------------------------------------------ the fused critic
-def test_fused_critic_computes_the_twin_critics():
-    torch.manual_seed(5)
-    twin = TwinCritic(45, 3, 64)
-    torch.manual_seed(5)
-    fused = FusedTwinCritic(45, 3, 64)  # same draws, same order: the same initial weights
-    for k, v in twin.state_dict().items():
-        assert torch.equal(fused.twin_state_dict()[k], v), k
-    assert sum(p.numel() for p in fused.parameters()) == sum(p.numel() for p in twin.parameters())
-    assert fused.w2.shape == (2, 64 + 3, 64)  # the action re-enters at the second layer (§4.1)
-    s, a = torch.randn(50, 45), torch.rand(50, 3) * 2 - 1
-    for q_f, q_t in zip(fused(s, a), twin(s, a)):
-        torch.testing.assert_close(q_f, q_t, rtol=1e-6, atol=1e-6)
-    torch.testing.assert_close(fused.q1(s, a), twin.q1(s, a), rtol=1e-6, atol=1e-6)
-    # Each half is exactly one Critic: changing critic 2's weights leaves Q1 alone.
-    q1_before = fused(s, a)[0].detach().clone()
-    with torch.no_grad():
-        fused.w2[1] += 1.0
-    assert torch.equal(fused(s, a)[0], q1_before)
-    # Back to two modules: a Critic holding the halves gives the same values.
-    c2 = Critic(45, 3, 64)
-    c2.load_state_dict({k[3:]: v for k, v in fused.twin_state_dict().items() if k.startswith("q2.")})
-    torch.testing.assert_close(c2(s, a), fused(s, a)[1], rtol=1e-6, atol=1e-6)
-
-
-def test_fused_critic_gradients_match_the_twin_critics():
-    torch.manual_seed(1)
-    twin = TwinCritic(OBS, ACT, 32)
-    torch.manual_seed(1)
-    fused = FusedTwinCritic(OBS, ACT, 32)
-    s, a, y = torch.randn(20, OBS), torch.rand(20, ACT) * 2 - 1, torch.randn(20)
-    for m in (twin, fused):
-        q1, q2 = m(s, a)
-        (F.mse_loss(q1, y) + F.mse_loss(q2, y)).backward()
-    grads = FusedTwinCritic.stack_twin_state_dict(
-        {k: p.grad for k, p in twin.named_parameters()})
-    for name in FusedTwinCritic.NAMES:
-        torch.testing.assert_close(getattr(fused, name).grad, grads[name], rtol=1e-5, atol=1e-6)
+    for net in ("actor", "actor_target", "critic", "critic_target"):
+        mine, theirs = getattr(agent, net).state_dict(), getattr(ref, net).state_dict()
+        assert mine.keys() == theirs.keys()
+        for k, v in mine.items():
+            torch.testing.assert_close(v, theirs[k], **tol)
 
 
 # ------------------------------------------------------------------------------ the update
 @pytest.mark.parametrize("policy_delay", [1, 2])
 def test_updates_follow_the_plain_definition(policy_delay):
     """Same seed: same initial weights; 12 updates of ours and of the plain TD3 end at the same
-    weights (float rounding: fused Adam orders its arithmetic differently), with the same info."""
+    weights (to float rounding: fused Adam and lerp order their arithmetic differently), with the
+    same info."""
     cfg = _cfg(policy_delay=policy_delay)
     agent, ref = TD3(OBS, ACT, cfg, seed=4), ReferenceTD3(cfg, seed=4)
     _assert_same_networks(agent, ref, rtol=0, atol=0)
@@ -184,8 +143,8 @@ def test_checkpoint_round_trip_continues_identically():
             assert torch.equal(v, getattr(b, net).state_dict()[k]), (net, k)
 
 
-def test_checkpoint_with_two_separate_critics_loads_and_continues():
-    """A checkpoint saved with two ``Critic`` modules (weights and Adam moments) is converted."""
+def test_checkpoint_of_the_per_tensor_adam_loads_and_continues():
+    """A checkpoint whose Adam ran the per-tensor loop loads; the fused kernel stays."""
     cfg = _cfg()
     ref = ReferenceTD3(cfg, seed=3)
     batches = _batches(10)
@@ -195,7 +154,9 @@ def test_checkpoint_with_two_separate_critics_loads_and_continues():
     agent.load_state_dict(copy.deepcopy(ref.state_dict()))
     assert agent.updates == 5
     _assert_same_networks(agent, ref, rtol=0, atol=0)
-    assert agent.critic_opt.param_groups[0]["fused"]  # the saved per-tensor loop is not taken over
+    assert ref.critic_opt.param_groups[0]["fused"] is None
+    for opt in (agent.actor_opt, agent.critic_opt):  # the saved per-tensor loop is not taken over
+        assert opt.param_groups[0]["fused"]
     for x in batches[5:]:
         info, info_ref = agent.update(x), ref.update(x)
         assert info.keys() == info_ref.keys()
@@ -206,13 +167,13 @@ def test_incompatible_critic_layout_is_a_clear_error():
     cfg = _cfg()
     sd = TD3(OBS, ACT, cfg, seed=0).state_dict()
     bad = copy.deepcopy(sd)
-    bad["critic"] = {"l1.weight": torch.zeros(1)}
-    with pytest.raises(ValueError, match="critic layout"):
+    bad["critic"] = {"l1.weight": torch.zeros(1)}  # one critic, not two
+    with pytest.raises(ValueError, match="checkpoint critic: incompatible critic layout"):
         TD3(OBS, ACT, cfg, seed=0).load_state_dict(bad)
-    mixed = copy.deepcopy(sd)
-    mixed["critic_target"] = ReferenceTD3(cfg, 0).critic_target.state_dict()
-    with pytest.raises(ValueError, match="critic_target"):
-        TD3(OBS, ACT, cfg, seed=0).load_state_dict(mixed)
+    stacked = copy.deepcopy(sd)  # both critics' weights stacked in one tensor per layer
+    stacked["critic_target"] = {n: torch.zeros(2, 1) for n in ("w1", "b1", "w2", "b2", "w3", "b3")}
+    with pytest.raises(ValueError, match="checkpoint critic_target: incompatible critic layout"):
+        TD3(OBS, ACT, cfg, seed=0).load_state_dict(stacked)
     with pytest.raises(ValueError, match="hidden"):
         TD3(OBS, ACT, _cfg(hidden=16), seed=0).load_state_dict(sd)
 

@@ -9,10 +9,10 @@ One update (``TD3.update``) on a minibatch (s, a, r, s', terminated):
   (τ = 5e-3) for actor and both critics.
 
 Where the time goes (benchmarks/bench_learner.py): the matrix products of the 2×512 networks, then
-the optimiser and the many small operations around them. The twin critics are one
-``networks.FusedTwinCritic`` (each layer's weights of both critics in one tensor), Adam runs fused
-(one kernel over all tensors of a network) and the soft target update is one
-``torch._foreach_lerp_`` over all target tensors.
+the optimiser and the many small operations around them. Adam runs fused (one kernel over all
+tensors of a network) and the soft target update is one ``torch._foreach_lerp_`` over all target
+tensors. The two critics stay two ``Critic`` modules: stacking their weights into one module (with a
+batched product per layer, or one product per critic) measured no faster on the CPU.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from .networks import Actor, FusedTwinCritic
+from .networks import Actor, TwinCritic
 
 
 @dataclass
@@ -95,48 +95,22 @@ def _adam(params, lr: float) -> torch.optim.Adam:
 
 def _load_adam(opt: torch.optim.Adam, sd: dict) -> None:
     """Load Adam's state but keep this optimiser's kernel (a saved state carries its own
-    ``fused``/``foreach`` flags, e.g. the per-tensor loop of older checkpoints)."""
+    ``fused``/``foreach`` flags, e.g. the per-tensor loop of checkpoints saved before Adam ran
+    fused here)."""
     kernel = {k: opt.param_groups[0].get(k) for k in ("fused", "foreach")}
     sd = {"state": sd["state"], "param_groups": [{**g, **kernel} for g in sd["param_groups"]]}
     opt.load_state_dict(sd)
 
 
-_FUSED_KEYS = set(FusedTwinCritic.NAMES)
-_TWIN_KEYS = {f"q{i}.l{k}.{p}" for i in (1, 2) for k in (1, 2, 3) for p in ("weight", "bias")}
-_TWIN_ORDER = [f"q{i}.l{k}.{p}" for i in (1, 2) for k in (1, 2, 3) for p in ("weight", "bias")]
+_CRITIC_KEYS = {f"q{i}.l{k}.{p}" for i in (1, 2) for k in (1, 2, 3) for p in ("weight", "bias")}
 
 
-def _critic_layout(weights: dict, name: str) -> str:
-    """``fused`` (``FusedTwinCritic``) or ``twin`` (two ``Critic`` modules, as saved by earlier
-    versions, converted on load); anything else is a ValueError."""
+def _check_critic_layout(weights: dict, name: str) -> None:
+    """Two ``Critic`` modules (``q1.l1.weight`` ... ``q2.l3.bias``); anything else is a ValueError."""
     keys = set(weights)
-    if keys == _FUSED_KEYS:
-        return "fused"
-    if keys == _TWIN_KEYS:
-        return "twin"
-    raise ValueError(f"checkpoint {name}: unknown critic layout (keys {sorted(keys)}); expected "
-                     f"{sorted(_FUSED_KEYS)} (fused twin critic) or q1./q2.l1-l3.weight/bias "
-                     f"(two separate critics)")
-
-
-def _twin_adam_state(sd: dict) -> dict:
-    """Adam state of a ``TwinCritic`` (12 tensors, in ``_TWIN_ORDER``) in the fused layout (6)."""
-    (group,) = sd["param_groups"]
-    ids = list(group["params"])
-    if len(ids) != len(_TWIN_ORDER):
-        raise ValueError(f"checkpoint critic_opt: {len(ids)} parameters, expected "
-                         f"{len(_TWIN_ORDER)} for two separate critics")
-    per = [sd["state"].get(i, {}) for i in ids]
-    state = {}
-    if any(per):
-        moments = {k for p in per for k in p if k != "step"}
-        fused = {}
-        for key in moments:
-            fused[key] = FusedTwinCritic.stack_twin_state_dict(
-                {name: p[key] for name, p in zip(_TWIN_ORDER, per)})
-        state = {j: {"step": per[0]["step"].clone(), **{k: fused[k][n] for k in moments}}
-                 for j, n in enumerate(FusedTwinCritic.NAMES)}
-    return {"state": state, "param_groups": [{**group, "params": list(range(6))}]}
+    if keys != _CRITIC_KEYS:
+        raise ValueError(f"checkpoint {name}: incompatible critic layout (keys {sorted(keys)}); "
+                         f"expected two critics q1/q2 with layers l1-l3 (weight, bias)")
 
 
 class TD3:
@@ -156,7 +130,7 @@ class TD3:
         with torch.random.fork_rng(devices=[]):
             torch.manual_seed(int(seed))
             self.actor = Actor(obs_dim, act_dim, c.hidden)
-            self.critic = FusedTwinCritic(obs_dim, act_dim, c.hidden)
+            self.critic = TwinCritic(obs_dim, act_dim, c.hidden)
         self.actor.to(self.device)
         self.critic.to(self.device)
         self.actor_target = copy.deepcopy(self.actor).requires_grad_(False)
@@ -198,13 +172,13 @@ class TD3:
                 "q_target": target.mean().item()}
         if self.updates % c.policy_delay == 0:
             # Critic weights are constants for the actor step: skip their weight gradients.
-            critic_params = list(self.critic.parameters())
-            for p in critic_params:
+            q1_params = list(self.critic.q1.parameters())
+            for p in q1_params:
                 p.requires_grad_(False)
             actor_loss = -self.critic.q1(obs, self.actor(obs)).mean()
             self.actor_opt.zero_grad(set_to_none=True)
             actor_loss.backward()
-            for p in critic_params:
+            for p in q1_params:
                 p.requires_grad_(True)
             self.actor_opt.step()
             self._soft_update()
@@ -230,18 +204,14 @@ class TD3:
         if dims != [self.obs_dim, self.act_dim, self.config.hidden]:
             raise ValueError(f"checkpoint networks have (obs, act, hidden) = {tuple(dims)}, this "
                              f"agent has {(self.obs_dim, self.act_dim, self.config.hidden)}")
-        twin = _critic_layout(sd["critic"], "critic") == "twin"
-        if _critic_layout(sd["critic_target"], "critic_target") != ("twin" if twin else "fused"):
-            raise ValueError("checkpoint critic and critic_target have different layouts")
-        self.actor.load_state_dict(sd["actor"])
-        self.actor_target.load_state_dict(sd["actor_target"])
         for name in ("critic", "critic_target"):
-            w = sd[name]
-            getattr(self, name).load_state_dict(FusedTwinCritic.stack_twin_state_dict(w) if twin
-                                                else w)
-        critic_opt = _twin_adam_state(sd["critic_opt"]) if twin else sd["critic_opt"]
+            _check_critic_layout(sd[name], name)
+        self.actor.load_state_dict(sd["actor"])
+        self.critic.load_state_dict(sd["critic"])
+        self.actor_target.load_state_dict(sd["actor_target"])
+        self.critic_target.load_state_dict(sd["critic_target"])
         _load_adam(self.actor_opt, sd["actor_opt"])
-        _load_adam(self.critic_opt, critic_opt)
+        _load_adam(self.critic_opt, sd["critic_opt"])
         self.gen.set_state(sd["gen"])
         self.updates = int(sd["updates"])
 
