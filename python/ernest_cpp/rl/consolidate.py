@@ -21,7 +21,7 @@ import torch
 from . import layout as L
 from .replay import ReplayBuffer
 from .storage import AtomicDir
-from .td3 import TD3, TD3Config
+from .td3 import TD3, TD3Config, resolve_device
 from .checkpoints import agent_from_checkpoint, find_checkpoint, load_checkpoint
 from .envs_util import evaluate, make_env, noise_for
 
@@ -39,9 +39,10 @@ def pool_buffers(sources: list, per_run: int, capacity: int | None = None) -> Re
 
 
 def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, seed: int = 0,
-                    progress=None) -> tuple[TD3, dict]:
-    """Fresh TD3 trained for ``iterations`` updates on ``buffer`` alone (no environment)."""
-    agent = TD3(buffer.obs_dim, buffer.act_dim, td3_cfg, seed=seed)
+                    progress=None, device: str = "cpu") -> tuple[TD3, dict]:
+    """Fresh TD3 trained for ``iterations`` updates on ``buffer`` alone (no environment), its
+    networks on ``device`` (a torch device, e.g. ``resolve_device("auto")``)."""
+    agent = TD3(buffer.obs_dim, buffer.act_dim, td3_cfg, seed=seed, device=device)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0xC0]))
     losses, t0 = [], time.perf_counter()
     for it in range(int(iterations)):
@@ -60,6 +61,7 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
     environment) instead of in this process."""
     c = cfg["consolidate"]
     torch.set_num_threads(int(cfg["torch_threads"]))
+    device = resolve_device(cfg.get("learner_device", "cpu"))
     specialists = []
     for r in runs:
         ck = load_checkpoint(r, with_buffer=True)
@@ -89,10 +91,10 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
 
         bar = tqdm(total=int(c["iterations"]), unit="it", dynamic_ncols=True)
     agent, info = train_on_buffer(pool, td3_cfg, int(c["iterations"]), int(cfg["seed"]),
-                                  (lambda i, m: bar.update(1)) if bar else None)
+                                  (lambda i, m: bar.update(1)) if bar else None, device)
     if bar:
         bar.close()
-    log(f"  {info['iterations']} iterations in {info['seconds']:.1f} s")
+    log(f"  {info['iterations']} iterations in {info['seconds']:.1f} s on {device}")
     state = {"env_id": "consolidated", "obs_dim": pool.obs_dim, "act_dim": pool.act_dim,
              "td3": agent.config_dict(), "layout": lay.to_dict(), "step": 0,
              "updates": agent.updates, "sources": [s["path"] for s in specialists],

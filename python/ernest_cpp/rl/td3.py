@@ -7,11 +7,18 @@ One update (``TD3.update``) on a minibatch (s, a, r, s', terminated):
 * critic loss    (Q1(s, a) - y)² + (Q2(s, a) - y)²
 * every d-th update (d = 2): actor loss -Q1(s, π(s)), then soft target updates θ' ← τ θ + (1-τ) θ'
   (τ = 5e-3) for actor and both critics.
+
+Where the time goes (benchmarks/bench_learner.py): the matrix products of the 2×512 networks, then
+the optimiser and the many small operations around them. Adam runs fused (one kernel over all
+tensors of a network) and the soft target update is one ``torch._foreach_lerp_`` over all target
+tensors. The two critics stay two ``Critic`` modules: stacking their weights into one module (with a
+batched product per layer, or one product per critic) measured no faster on the CPU.
 """
 
 from __future__ import annotations
 
 import copy
+import re
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -59,6 +66,53 @@ def _as_tensor(x) -> torch.Tensor:
     return torch.from_numpy(np.ascontiguousarray(x, dtype=np.float32))
 
 
+def resolve_device(value, key: str = "learner_device") -> str:
+    """The torch device a ``learner_device`` setting names: ``auto`` (``cuda`` when torch sees a GPU,
+    else ``cpu``), ``cpu``, ``cuda`` or ``cuda:N``. A GPU is used when present, never required
+    (``auto``); naming one that torch does not see is a ValueError."""
+    if not isinstance(value, str) or not re.fullmatch(r"auto|cpu|cuda(:[0-9]+)?", value):
+        raise ValueError(f"{key} = {value!r}: choose auto, cpu, cuda or cuda:N")
+    if value == "auto":
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    if value.startswith("cuda"):
+        n = torch.cuda.device_count() if torch.cuda.is_available() else 0
+        index = int(value[5:]) if ":" in value else 0
+        if index >= n:
+            raise ValueError(f"{key} = {value!r}: torch sees {n} GPU(s) (cuda:0 to cuda:{n - 1}); "
+                             f"use auto or cpu" if n else
+                             f"{key} = {value!r}: torch sees no GPU; use auto or cpu")
+    return value
+
+
+def _adam(params, lr: float) -> torch.optim.Adam:
+    """Adam with its fused kernel (CPU and CUDA); the multi-tensor one where fused is missing."""
+    params = list(params)
+    try:
+        return torch.optim.Adam(params, lr=lr, fused=True)
+    except RuntimeError:
+        return torch.optim.Adam(params, lr=lr, foreach=True)
+
+
+def _load_adam(opt: torch.optim.Adam, sd: dict) -> None:
+    """Load Adam's state but keep this optimiser's kernel (a saved state carries its own
+    ``fused``/``foreach`` flags, e.g. the per-tensor loop of checkpoints saved before Adam ran
+    fused here)."""
+    kernel = {k: opt.param_groups[0].get(k) for k in ("fused", "foreach")}
+    sd = {"state": sd["state"], "param_groups": [{**g, **kernel} for g in sd["param_groups"]]}
+    opt.load_state_dict(sd)
+
+
+_CRITIC_KEYS = {f"q{i}.l{k}.{p}" for i in (1, 2) for k in (1, 2, 3) for p in ("weight", "bias")}
+
+
+def _check_critic_layout(weights: dict, name: str) -> None:
+    """Two ``Critic`` modules (``q1.l1.weight`` ... ``q2.l3.bias``); anything else is a ValueError."""
+    keys = set(weights)
+    if keys != _CRITIC_KEYS:
+        raise ValueError(f"checkpoint {name}: incompatible critic layout (keys {sorted(keys)}); "
+                         f"expected two critics q1/q2 with layers l1-l3 (weight, bias)")
+
+
 class TD3:
     """Actor, twin critics, their targets and Adam optimisers; the update counter decides the delay."""
 
@@ -81,8 +135,10 @@ class TD3:
         self.critic.to(self.device)
         self.actor_target = copy.deepcopy(self.actor).requires_grad_(False)
         self.critic_target = copy.deepcopy(self.critic).requires_grad_(False)
-        self.actor_opt = torch.optim.Adam(self.actor.parameters(), lr=c.actor_lr)
-        self.critic_opt = torch.optim.Adam(self.critic.parameters(), lr=c.critic_lr)
+        self.actor_opt = _adam(self.actor.parameters(), c.actor_lr)
+        self.critic_opt = _adam(self.critic.parameters(), c.critic_lr)
+        self._online = list(self.actor.parameters()) + list(self.critic.parameters())
+        self._target = list(self.actor_target.parameters()) + list(self.critic_target.parameters())
         self.updates = 0
 
     @torch.no_grad()
@@ -131,10 +187,8 @@ class TD3:
 
     @torch.no_grad()
     def _soft_update(self):
-        tau = self.config.tau
-        for net, tgt in ((self.actor, self.actor_target), (self.critic, self.critic_target)):
-            for p, tp in zip(net.parameters(), tgt.parameters()):
-                tp.mul_(1.0 - tau).add_(p, alpha=tau)
+        # θ' ← θ' + τ (θ - θ') = τ θ + (1 - τ) θ', all target tensors in one call.
+        torch._foreach_lerp_(self._target, self._online, self.config.tau)
 
     # ---------------------------------------------------------------- persistence
     def state_dict(self) -> dict:
@@ -150,12 +204,14 @@ class TD3:
         if dims != [self.obs_dim, self.act_dim, self.config.hidden]:
             raise ValueError(f"checkpoint networks have (obs, act, hidden) = {tuple(dims)}, this "
                              f"agent has {(self.obs_dim, self.act_dim, self.config.hidden)}")
+        for name in ("critic", "critic_target"):
+            _check_critic_layout(sd[name], name)
         self.actor.load_state_dict(sd["actor"])
         self.critic.load_state_dict(sd["critic"])
         self.actor_target.load_state_dict(sd["actor_target"])
         self.critic_target.load_state_dict(sd["critic_target"])
-        self.actor_opt.load_state_dict(sd["actor_opt"])
-        self.critic_opt.load_state_dict(sd["critic_opt"])
+        _load_adam(self.actor_opt, sd["actor_opt"])
+        _load_adam(self.critic_opt, sd["critic_opt"])
         self.gen.set_state(sd["gen"])
         self.updates = int(sd["updates"])
 

@@ -32,7 +32,7 @@ from . import demos
 from .exploration import make_exploration
 from .replay import ReplayBuffer
 from .storage import AtomicDir, clean_stale
-from .td3 import TD3, TD3Config
+from .td3 import TD3, TD3Config, resolve_device
 
 
 def _rng_state(rng: np.random.Generator) -> dict:
@@ -99,7 +99,8 @@ class Trainer:
             yaml.safe_dump(cfg, fh, sort_keys=False)
 
     def _learner_device(self) -> str:
-        return "cpu"
+        # Runs saved before the setting existed learned on the CPU: resume them there.
+        return resolve_device(self.cfg.get("learner_device", "cpu"))
 
     def _make_vec(self):
         ec = self.cfg["env"]
