@@ -76,10 +76,14 @@ def _train(args) -> int:
             raise ValueError("--resume continues with the run's saved settings; use --set to "
                              "change one")
         cfg = load_checkpoint(args.run_dir, with_buffer=False)["state"]["config"]
-        if "ray" not in cfg:  # saved before the Ray backend existed
-            from .config import load_preset
+        from .config import load_preset
 
-            cfg["ray"] = load_preset("quick")["ray"]
+        # Settings newer than the run (ray, learner_device, demos) get the quick preset's values,
+        # which --set may then change; a run from before learner_device learned on the CPU.
+        newer = {k: v for k, v in load_preset("quick").items() if k not in cfg}
+        if "learner_device" in newer:
+            newer["learner_device"] = "cpu"
+        cfg.update(newer)
         if extra:
             cfg = merge(cfg, extra)
         for o in args.set:
