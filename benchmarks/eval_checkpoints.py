@@ -60,6 +60,8 @@ def course_result(policy, course: str, seeds: int) -> dict:
 
 def checkpoints(run: str) -> list[str]:
     root = os.path.join(run, "checkpoints")
+    if not os.path.isdir(root):  # a checkpoint folder itself
+        return [run]
     names = sorted((d for d in os.listdir(root) if STEP_DIR.match(d)), key=lambda d: int(d[5:]))
     return [os.path.join(root, d) for d in names] or [run]
 
@@ -93,7 +95,7 @@ def main() -> None:
                 r = course_result(agent.act, c, a.seeds)
                 cells.append(f"{r['crossed']}/{a.seeds} / {r['progress']:.2f}" if "crossed" in r
                              else f"{100 * r['travel_reduction']:.1f} % / {r['max_lateral']:.2f} m")
-            row = (f"| {os.path.basename(run.rstrip('/'))} | {st['step']} | "
+            row = (f"| {os.path.basename(os.path.normpath(run))} | {st['step']} | "
                    f"{st.get('elapsed', float('nan')) / 60:.1f} | " + " | ".join(cells) + " |")
             lines.append(row)
             print(row, f"({time.perf_counter() - t0:.0f} s)", flush=True)
