@@ -130,20 +130,17 @@ def _progress_line(name: str, run_dir: str, total: int) -> str:
 
 def run_specialists(cfg: dict, log=print) -> list[str]:
     out, preset = cfg["out"], cfg["preset"]
-    todo, dirs = [], []
-    for name, s in cfg["specialists"].items():
-        run_dir = os.path.join(out, name)
-        dirs.append(run_dir)
-        done_step = _checkpoint_step(run_dir)
-        if done_step is not None and done_step >= s["steps"]:
-            log(f"specialist {name}: done ({done_step} transitions)")
-            continue
-        todo.append((name, s, run_dir, done_step))
+    todo = [(name, s, os.path.join(out, name)) for name, s in cfg["specialists"].items()]
+    dirs = [run_dir for _, _, run_dir in todo]
     running: dict[str, tuple] = {}
     t_last = 0.0
     while todo or running:
         while todo and len(running) < cfg["parallel"]:
-            name, s, run_dir, done_step = todo.pop(0)
+            name, s, run_dir = todo.pop(0)
+            done_step = _checkpoint_step(run_dir)  # now, not when the pipeline started
+            if done_step is not None and done_step >= s["steps"]:
+                log(f"specialist {name}: done ({done_step} transitions)")
+                continue
             args = ["train", "--scenario", s["scenario"], "--preset", preset, "--steps",
                     str(s["steps"]), "--run-dir", run_dir, "--set", "log.progress_bar=false"]
             for a in s["set"]:
