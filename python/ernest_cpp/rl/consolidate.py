@@ -90,8 +90,17 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
         from tqdm import tqdm
 
         bar = tqdm(total=int(c["iterations"]), unit="it", dynamic_ncols=True)
-    agent, info = train_on_buffer(pool, td3_cfg, int(c["iterations"]), int(cfg["seed"]),
-                                  (lambda i, m: bar.update(1)) if bar else None, device)
+    total, t0 = int(c["iterations"]), time.perf_counter()
+
+    def progress(done, m):  # done: iterations so far
+        if bar:
+            bar.update(1)
+        elif done % max(1, total // 10) == 0:  # without a bar: a line every tenth
+            el = time.perf_counter() - t0
+            log(f"  iteration {done}/{total}, {el:.0f} s, {done / el:.1f} iterations/s, "
+                f"critic loss {m['critic_loss']:.3g}")
+
+    agent, info = train_on_buffer(pool, td3_cfg, total, int(cfg["seed"]), progress, device)
     if bar:
         bar.close()
     log(f"  {info['iterations']} iterations in {info['seconds']:.1f} s on {device}")
