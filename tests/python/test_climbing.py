@@ -11,7 +11,8 @@ torch.set_num_threads(1)
 
 import ernest_cpp.envs  # noqa: E402,F401
 from ernest_cpp.envs.baselines import PassiveController  # noqa: E402
-from ernest_cpp.envs.climbing import PhaseGait, StepClimbController  # noqa: E402
+from ernest_cpp.envs.climbing import (BicklerCrossController, PhaseGait,  # noqa: E402
+                                     StepClimbController)
 from ernest_cpp.evaluate import run_episode  # noqa: E402
 from ernest_cpp.reproduce import wheels_over  # noqa: E402
 from ernest_cpp.rl import config as C  # noqa: E402
@@ -32,6 +33,26 @@ def test_step_climb_gets_all_four_wheels_up_the_wheel_high_step(seed):
     wp = np.asarray(env.core.state.wheel_position)
     top = env.scenario.step_height
     assert np.all(wp[:, 2] > top + 0.1)  # wheel centres a radius above the step's top (0.17)
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_bickler_crossing_gets_the_rear_wheels_over_where_the_passive_bogie_is_trapped(seed):
+    _, _, passive_env, _ = run_episode("ernest/BicklerTrap-v0", {"episode_length": 30.0},
+                                       PassiveController(), True, seed)
+    assert wheels_over("bickler", passive_env) == 2  # front over, rear trapped (§5.2, Fig. 17)
+    _, _, env, _ = run_episode("ernest/BicklerTrap-v0", {"episode_length": 30.0},
+                               BicklerCrossController(), False, seed)
+    assert wheels_over("bickler", env) == 4
+
+
+def test_demonstrations_from_another_environment(tmp_path):
+    cfg = _cfg(**{"demos.controller": "bickler_cross", "demos.episodes": 1,
+                  "demos.env": "ernest/BicklerTrap-v0", "demos.kwargs": "{episode_length: 3.0}"})
+    data, _ = demos.collect("ernest/Step-v0", cfg, -np.ones(3), np.ones(3), log=lambda s: None)
+    assert len(data["rew"]) == 6  # 3 s of the trap at 2 Hz, not the training env's 5 s
+    env = ernest_cpp.envs.ErnestEnv("bickler", soil="dry_sand", episode_length=3.0)
+    obs, _ = env.reset(seed=2000000)
+    np.testing.assert_array_equal(obs, data["obs"][0])
 
 
 def test_phase_gait_commands_stay_within_the_action_limits_and_follow_its_phases():

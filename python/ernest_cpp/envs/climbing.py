@@ -47,13 +47,13 @@ STEP_CLIMB_TRIGGER = 0.127  # [m] leading front wheel to the face when phase 1 s
 #: Phases of the Bickler-trap crossing (§5.2, Fig. 18), after the rear wheels reach the rocks:
 #: the roll tips the chassis so one rear wheel climbs, then the other.
 BICKLER_PHASES: tuple[tuple[float, float, float, float], ...] = (
-    (0.00, 0.00, 0.00, 0.200),
-    (3.00, 0.00, 29.00, 0.200),
-    (4.00, 0.00, -29.00, 0.200),
-    (3.00, 0.00, 29.00, 0.200),
-    (3.00, 0.00, 0.00, 0.200),
+    (0.00, 7.13, 0.00, 0.200),     # drive up: the front wheels roll over the rocks
+    (0.54, -43.47, 18.01, 0.155),  # rear wheels at the rocks: yaw hard, roll one way
+    (4.16, -28.97, -26.80, 0.186), # roll to the other stop: one rear wheel climbs
+    (1.56, -16.10, 28.32, 0.197),  # and back: the other one follows
+    (3.02, -2.81, -7.31, 0.198),   # level out and drive on
 )
-BICKLER_TRIGGER = 0.05  # [m] leading rear wheel to the rocks when phase 1 starts
+BICKLER_TRIGGER = 0.033  # [m] leading rear wheel to the rocks when phase 1 starts
 
 
 def _along_path(env, points: np.ndarray) -> np.ndarray:
@@ -166,7 +166,9 @@ class PhaseGait:
 
 class BicklerCrossController(PhaseGait):
     """The Bickler-trap crossing of §5.2 as a scripted phase gait: the front wheels roll over the
-    rocks, then the roll lifts the rear wheels over one at a time."""
+    rocks, then the roll lifts the rear wheels over one at a time (tuned defaults: all four wheels
+    over ``ernest/BicklerTrap-v0`` in 10 of 10 seeds at dt and dt / 4,
+    ``benchmarks/tune_gait.py bickler``)."""
 
     def __init__(self, phases=BICKLER_PHASES, trigger: float = BICKLER_TRIGGER, **kw):
         kw.setdefault("trigger_wheels", "rear")

@@ -8,9 +8,10 @@ on them with the same TD3 updates and replay noise as on its own experience.
 Settings (``demos`` section of a preset)::
 
     demos:
-      controller: null   # null (none) | step_climb | crawling | passive
+      controller: null   # null (none) | step_climb | bickler_cross | crawling | passive
       episodes: 0        # demonstrator episodes collected before the first update
       seed: 2000000      # episode k uses seed + k
+      env: null          # env id of the episodes (null: the training env's)
       kwargs: {}         # env kwargs for the demonstrator's episodes, over env.kwargs
 """
 
@@ -20,7 +21,7 @@ import time
 
 import numpy as np
 
-CONTROLLERS = ("step_climb", "crawling", "passive")
+CONTROLLERS = ("step_climb", "bickler_cross", "crawling", "passive")
 
 
 def make_controller(name: str):
@@ -29,6 +30,8 @@ def make_controller(name: str):
 
     if name == "step_climb":
         return climbing.StepClimbController(), False
+    if name == "bickler_cross":
+        return climbing.BicklerCrossController(), False
     if name == "crawling":
         return baselines.CrawlingGaitController(), False
     if name == "passive":
@@ -58,11 +61,11 @@ def collect(env_id: str, cfg: dict, low: np.ndarray, high: np.ndarray, log=print
         return None, []
     d = cfg["demos"]
     ctrl, passive = make_controller(name)
-    kwargs = dict(cfg["env"].get("kwargs") or {})
+    kwargs = {} if d.get("env") else dict(cfg["env"].get("kwargs") or {})
     kwargs.update(d.get("kwargs") or {})
     if passive:
         kwargs["passive"] = True
-    env = make_env(env_id, kwargs)
+    env = make_env(d.get("env") or env_id, kwargs)
     rows: dict[str, list] = {k: [] for k in ("obs", "act", "rew", "next_obs", "done")}
     returns = []
     t0 = time.perf_counter()
