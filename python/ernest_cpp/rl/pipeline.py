@@ -100,8 +100,9 @@ def _ernest(args: list[str], log_path: str | None = None) -> subprocess.Popen:
     cmd = [sys.executable, "-m", "ernest_cpp.cli", *args]
     out = open(log_path, "a") if log_path else None
     try:
+        env = dict(os.environ, PYTHONUNBUFFERED="1")  # the logs show progress as it happens
         return subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT if out else None,
-                                preexec_fn=_die_with_parent)
+                                env=env, preexec_fn=_die_with_parent)
     finally:
         if out:
             out.close()
