@@ -22,9 +22,11 @@ from ernest_cpp.rl.networks import Actor
 from test_runtime import one_thread, run_runtime  # noqa: F401  (one_thread: a fixture)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-DEFAULT_POLICY = os.path.join(ROOT, "policies", "ernest_default.pt")
+# A policy exported with layout ernest-obs-v1 (the C++ normalisation table before the layout
+# version was bumped): a legacy file that must keep loading and acting bit for bit.
+LEGACY_POLICY = os.path.join(ROOT, "tests", "data", "legacy_policy_v1.pt")
 
-# (normalised observation seed, command) of the default policy, one observation per call on one
+# (normalised observation seed, command) of that policy, one observation per call on one
 # thread, recorded with torch alone before this change (commit ba7d919): float32 bit patterns.
 RECORDED_COMMANDS = [
     ["0x1.9987c4p-3", "-0x1.c4898ep-3", "-0x1.6d0478p-5"],
@@ -55,10 +57,10 @@ def test_python_layout_is_the_cpp_table():
 
 
 def test_default_policy_acts_bit_for_bit_as_before(one_thread):
-    _, meta = load_policy(DEFAULT_POLICY)
+    _, meta = load_policy(LEGACY_POLICY)
     assert meta["layout_version"] == "ernest-obs-v1"  # a legacy file with the C++ table: accepted
-    L.check_policy_layout(meta, DEFAULT_POLICY)
-    learned, passive = evaluate.controllers(DEFAULT_POLICY)[evaluate.LEARNED]
+    L.check_policy_layout(meta, LEGACY_POLICY)
+    learned, passive = evaluate.controllers(LEGACY_POLICY)[evaluate.LEARNED]
     assert passive is False
     for obs, cmd_hex in zip(fixed_observations(), RECORDED_COMMANDS):
         cmd = np.array([float.fromhex(h) for h in cmd_hex])
@@ -70,7 +72,7 @@ def test_default_policy_acts_bit_for_bit_as_before(one_thread):
 def test_default_policy_in_the_cpp_runtime_acts_as_in_python(tmp_path):
     obs = fixed_observations()
     np.savetxt(tmp_path / "obs.csv", obs.astype(np.float64), delimiter=",", fmt="%.9g")
-    r = run_runtime("--policy", DEFAULT_POLICY, "--replay", str(tmp_path / "obs.csv"),
+    r = run_runtime("--policy", LEGACY_POLICY, "--replay", str(tmp_path / "obs.csv"),
                     "--actions", str(tmp_path / "act.csv"))
     assert r.returncode == 0, r.stderr
     got = np.loadtxt(tmp_path / "act.csv", delimiter=",", skiprows=1)[:, 1:]
@@ -105,3 +107,19 @@ def test_a_policy_with_the_other_table_is_refused_before_any_episode(tmp_path, c
     meta["layout_version"] = "ernest-obs-v7"
     with pytest.raises(ValueError, match="layout_version 'ernest-obs-v7'"):
         L.check_policy_layout(meta, path)
+
+
+def test_committed_default_policy_in_the_cpp_runtime_acts_as_in_python(tmp_path, one_thread):
+    """The committed policy (layout v2) gives the same actions onboard as in Python."""
+    policy = os.path.join(ROOT, "policies", "ernest_default.pt")
+    _, meta = load_policy(policy)
+    assert meta["layout_version"] == L.LAYOUT_VERSION
+    obs = fixed_observations()
+    learned, _ = evaluate.controllers(policy)[evaluate.LEARNED]
+    want = np.asarray([learned(o) for o in obs])
+    np.savetxt(tmp_path / "obs.csv", obs.astype(np.float64), delimiter=",", fmt="%.9g")
+    r = run_runtime("--policy", policy, "--replay", str(tmp_path / "obs.csv"),
+                    "--actions", str(tmp_path / "act.csv"))
+    assert r.returncode == 0, r.stderr
+    got = np.loadtxt(tmp_path / "act.csv", delimiter=",", skiprows=1)[:, 1:]
+    np.testing.assert_array_equal(got, want)
