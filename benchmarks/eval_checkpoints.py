@@ -12,16 +12,12 @@ A course row counts a seed as crossed when all four wheels end over the obstacle
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 
-import numpy as np
+from eval_policy import row  # the same episodes and figures as the exported policy's table
 
-import ernest_cpp.envs  # noqa: F401
-from ernest_cpp.reproduce import wheels_over
 from ernest_cpp.rl.checkpoints import STEP_DIR, agent_from_checkpoint, load_checkpoint
-from ernest_cpp.rl.envs_util import make_env
 
 COURSES = {  # name: (env id, kwargs, obstacle kind for wheels_over or None)
     "step": ("ernest/WheelStep-v0", {}, "step"),
@@ -32,30 +28,13 @@ COURSES = {  # name: (env id, kwargs, obstacle kind for wheels_over or None)
 
 
 def course_result(policy, course: str, seeds: int) -> dict:
+    """``eval_policy.row`` for a policy on normalised observations (a checkpoint's actor)."""
     env_id, kwargs, kind = COURSES[course]
-    env = make_env(env_id, kwargs)
-    over, prog, tr, lat = [], [], [], []
-    for s in range(seeds):
-        obs, _ = env.reset(seed=s)
-        worst = 0.0
-        while True:
-            obs, _, term, trunc, info = env.step(policy(obs))
-            worst = max(worst, abs(float(info["lateral_deviation"])))
-            if term or trunc:
-                break
-        u = env.unwrapped
-        prog.append(float(info["path_progress"]))
-        tr.append(float(u.metrics["travel_reduction"]))
-        lat.append(worst)
-        if kind:
-            over.append(wheels_over(kind, u))
-    env.close()
-    out = {"progress": float(np.mean(prog)), "travel_reduction": float(np.mean(tr)),
-           "max_lateral": float(np.max(lat))}
-    if kind:
-        out["crossed"] = int(sum(w == 4 for w in over))
-        out["wheels_over"] = over
-    return out
+    return row(env_id, kwargs, kind, lambda obs, env=None: policy(obs), False, seeds)
+
+
+def kind_of(course: str) -> str | None:
+    return COURSES[course][2]
 
 
 def checkpoints(run: str) -> list[str]:
@@ -93,8 +72,8 @@ def main() -> None:
             cells = []
             for c in courses:
                 r = course_result(agent.act, c, a.seeds)
-                cells.append(f"{r['crossed']}/{a.seeds} / {r['progress']:.2f}" if "crossed" in r
-                             else f"{100 * r['travel_reduction']:.1f} % / {r['max_lateral']:.2f} m")
+                cells.append(f"{r['crossed']}/{a.seeds} / {r['progress']:.2f}" if kind_of(c)
+                             else f"{r['tr']:.1f} % / {r['lat']:.2f} m")
             row = (f"| {os.path.basename(os.path.normpath(run))} | {st['step']} | "
                    f"{st.get('elapsed', float('nan')) / 60:.1f} | " + " | ".join(cells) + " |")
             lines.append(row)

@@ -142,13 +142,12 @@ def run_specialists(cfg: dict, log=print) -> list[str]:
             if done_step is not None and done_step >= s["steps"]:
                 log(f"specialist {name}: done ({done_step} transitions)")
                 continue
-            args = ["train", "--scenario", s["scenario"], "--preset", preset, "--steps",
-                    str(s["steps"]), "--run-dir", run_dir, "--set", "log.progress_bar=false"]
+            # A resumed run keeps its saved settings (the preset is not read again).
+            args = ["train", "--scenario", s["scenario"], "--steps", str(s["steps"]),
+                    "--run-dir", run_dir, "--set", "log.progress_bar=false"]
+            args += ["--resume"] if done_step is not None else ["--preset", preset]
             for a in s["set"]:
                 args += ["--set", str(a)]
-            if done_step is not None:
-                args.append("--resume")
-                args = [a for a in args if a not in ("--preset", preset)]
             log(f"specialist {name}: {'resuming at ' + str(done_step) if done_step else 'start'}"
                 f" ({s['steps']} transitions, log {run_dir}.log)")
             os.makedirs(out, exist_ok=True)

@@ -86,6 +86,7 @@ class Trainer:
         self.lost_transitions = 0  # env steps of Ray workers that died (never in a local run)
         self.demo_transitions = 0  # scripted demonstrator transitions in the buffer (demos)
         self.elapsed = 0.0  # wall seconds of training over all resumes (learning curves)
+        self._t_start = None  # perf_counter at the start of the current train() call
         demos.check_settings(cfg)
         self.recent = collections.deque(maxlen=int(cfg["log"]["recent_episodes"]))
         self.last_eval: dict = {}
@@ -202,13 +203,15 @@ class Trainer:
             lines = fh.read().splitlines()
         if not lines:
             return
-        col = lines[0].split(",").index("step") if "step" in lines[0].split(",") else None
-        if col is None:
+        header = lines[0].split(",")
+        if "step" not in header:
             return
+        col = header.index("step")
+
         def before(ln: str) -> bool:  # a partial row of a writer killed mid-line goes too
             cells = ln.split(",")
             try:
-                return len(cells) == len(lines[0].split(",")) and float(cells[col]) <= self.step
+                return len(cells) == len(header) and float(cells[col]) <= self.step
             except ValueError:
                 return False
 
@@ -308,8 +311,9 @@ class Trainer:
     # The loop's bookkeeping, shared with the Ray trainers (ray_trainer.py).
     def _elapsed(self) -> float:
         """Wall seconds of training so far, over all resumes."""
-        t0 = getattr(self, "_t_start", None)
-        return self.elapsed + (time.perf_counter() - t0 if t0 is not None else 0.0)
+        if self._t_start is None:
+            return self.elapsed
+        return self.elapsed + time.perf_counter() - self._t_start
 
     def _write_progress(self, run, perf: dict) -> None:
         """<run>/progress.json (atomically): where the run is and how fast it goes, for
