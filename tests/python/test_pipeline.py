@@ -3,6 +3,7 @@ consolidation, export with checksum, report; a second run resumes (skips what is
 
 from __future__ import annotations
 
+import csv
 import json
 import os
 
@@ -54,7 +55,39 @@ def test_pipeline_trains_consolidates_exports_and_resumes(tmp_path):
     again: list[str] = []
     P.run_pipeline(cfg, stages=("specialists", "consolidate"), log=again.append)
     assert "specialist step: done (40 transitions)" in again
-    assert "[2/5] consolidate: done" in again
+    assert "  consolidation seed 0: done" in again
+
+
+def test_pipeline_selects_among_kept_agents_on_validation_episodes(tmp_path):
+    cons = {"seeds": [0, 3], "set": ["consolidate.iterations=20", "consolidate.hidden=16",
+                                      "consolidate.eval_episodes=1", "consolidate.batch_size=16",
+                                      "consolidate.keep_every=10", "consolidate.keep_from=10"]}
+    cfg = P.load_pipeline(_pipeline(tmp_path, consolidate=cons,
+                                    select={"seeds": [10, 12], "slopes_deg": [18]}))
+    lines: list[str] = []
+    P.run_pipeline(cfg, stages=("specialists", "consolidate", "select", "export", "report"),
+                   log=lines.append)
+    out = cfg["out"]
+    kept = {os.path.join(d, "checkpoints", n) for d in ("consolidated", "consolidated-s3")
+            for n in ("iteration-00000010", "consolidated")}
+    rows = list(csv.DictReader(open(os.path.join(out, "selection.csv"))))
+    assert {r["candidate"] for r in rows[:-1]} == kept and rows[-1]["candidate"].startswith("crawl")
+    for r in rows[:-1]:  # score = step + trap crossings + slopes below crawling + slopes tracked
+        slopes = ["slope 18 m90", "slope 18 wet_sand"]
+        below = sum(float(r[f"{k} TR"]) < float(rows[-1][f"{k} TR"]) for k in slopes) / 2
+        tracked = sum(float(r[f"{k} lateral [m]"]) <= 0.3 for k in slopes) / 2
+        expect = float(r["step crossed"]) + float(r["trap crossed"]) + below + tracked
+        assert float(r["score"]) == pytest.approx(expect)
+    best = max(rows[:-1], key=lambda r: (float(r["score"]), -float(r["slope TR mean"])))
+    chosen = json.load(open(os.path.join(out, "selected.json")))["checkpoint"]
+    assert chosen == os.path.join(out, best["candidate"])
+    assert any("[4/6] export " + chosen in ln for ln in lines)
+    load_policy(cfg["policy"])
+    assert "Consolidated policy against every specialist" in open(
+        os.path.join(out, "training.md")).read()  # the chosen agent's table (out/evaluation.csv)
+    again: list[str] = []
+    P.run_pipeline(cfg, stages=("consolidate", "select"), log=again.append)
+    assert "  consolidation seed 3: done" in again and "[3/6] select: done" in again
 
 
 def test_pipeline_resumes_an_interrupted_specialist(tmp_path):
@@ -74,7 +107,16 @@ def test_pipeline_resumes_an_interrupted_specialist(tmp_path):
     ({"specialists": {}}, "specialists"),
     ({"specialists": {"x": {"scenario": "step"}}}, "scenario and steps"),
     ({"specialists": {"x": {"scenario": "step", "steps": 0}}}, "steps"),
-    ({"specialists": {"x": {"scenario": "step", "steps": 5, "lr": 1}}}, "unknown key")])
+    ({"specialists": {"x": {"scenario": "step", "steps": 5, "lr": 1}}}, "unknown key"),
+    ({"consolidate": {"seeds": [0, 0]}}, "consolidate.seeds"),
+    ({"consolidate": {"seeds": []}}, "consolidate.seeds"),
+    ({"consolidate": {"lr": 1}}, "unknown key"),
+    ({"select": {"seeds": [0, 10]}}, "must not overlap the reported seeds"),
+    ({"select": {"seeds": [20, 10]}}, "select.seeds"),
+    ({"select": {"slopes_deg": [20]}}, "other than the reported 20"),
+    ({"select": {"max_lateral": 0}}, "max_lateral"),
+    ({"select": {"workers": 0}}, "workers"),
+    ({"select": {"colour": 1}}, "unknown key")])
 def test_bad_pipeline_files_are_refused(tmp_path, over, match):
     with pytest.raises(ValueError, match=match):
         P.load_pipeline(_pipeline(tmp_path, **over))

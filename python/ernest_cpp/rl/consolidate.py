@@ -39,9 +39,10 @@ def pool_buffers(sources: list, per_run: int, capacity: int | None = None) -> Re
 
 
 def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, seed: int = 0,
-                    progress=None, device: str = "cpu") -> tuple[TD3, dict]:
+                    progress=None, device: str = "cpu", snapshot=None) -> tuple[TD3, dict]:
     """Fresh TD3 trained for ``iterations`` updates on ``buffer`` alone (no environment), its
-    networks on ``device`` (a torch device, e.g. ``resolve_device("auto")``)."""
+    networks on ``device`` (a torch device, e.g. ``resolve_device("auto")``). ``snapshot(done,
+    agent)``, if given, is called after every update (it decides whether to keep the agent)."""
     agent = TD3(buffer.obs_dim, buffer.act_dim, td3_cfg, seed=seed, device=device)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0xC0]))
     losses, t0 = [], time.perf_counter()
@@ -50,9 +51,31 @@ def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, s
         losses.append(m["critic_loss"])
         if progress is not None:
             progress(it + 1, m)
+        if snapshot is not None:
+            snapshot(it + 1, agent)
     dt = time.perf_counter() - t0
     return agent, {"iterations": int(iterations), "seconds": dt,
                    "final_critic_loss": float(np.mean(losses[-100:])) if losses else float("nan")}
+
+
+def keep_settings(c: dict) -> tuple[int, int]:
+    """(keep_every, keep_from) of a ``consolidate`` section, validated: besides the final policy,
+    the agent after every ``keep_every`` iterations from ``keep_from`` on (0: none) is kept."""
+    every, start, total = c.get("keep_every", 0), c.get("keep_from", 0), c["iterations"]
+    for name, v in (("keep_every", every), ("keep_from", start)):
+        if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+            raise ValueError(f"consolidate.{name} = {v!r} must be a whole number >= 0")
+    if start > total:
+        raise ValueError(f"consolidate.keep_from = {start} must be at most consolidate.iterations "
+                         f"= {total}")
+    return every, start
+
+
+def _write_agent(path: str, agent: TD3, state: dict) -> None:
+    with AtomicDir(path, "checkpoint", {"consolidated": True}) as tmp:
+        torch.save(agent.state_dict(), os.path.join(tmp, "agent.pt"))
+        with open(os.path.join(tmp, "state.json"), "w") as fh:
+            json.dump(state, fh)
 
 
 def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies: bool = True,
@@ -100,20 +123,27 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
             log(f"  iteration {done}/{total}, {el:.0f} s, {done / el:.1f} iterations/s, "
                 f"critic loss {m['critic_loss']:.3g}")
 
-    agent, info = train_on_buffer(pool, td3_cfg, total, int(cfg["seed"]), progress, device)
+    ck_root = os.path.join(out_dir, "checkpoints")
+    every, start = keep_settings(c)
+
+    def state_of(agent, info):
+        return {"env_id": "consolidated", "obs_dim": pool.obs_dim, "act_dim": pool.act_dim,
+                "td3": agent.config_dict(), "layout": lay.to_dict(), "step": 0,
+                "updates": agent.updates, "sources": [s["path"] for s in specialists],
+                "config": cfg, "consolidation": info}
+
+    def snapshot(done, agent):  # intermediate policies for ``ernest train-default``'s selection
+        if every and start <= done < total and done % every == 0:
+            info = {"iterations": done, "seconds": time.perf_counter() - t0}
+            _write_agent(os.path.join(ck_root, f"iteration-{done:08d}"), agent,
+                         state_of(agent, info))
+
+    agent, info = train_on_buffer(pool, td3_cfg, total, int(cfg["seed"]), progress, device,
+                                  snapshot if every else None)
     if bar:
         bar.close()
     log(f"  {info['iterations']} iterations in {info['seconds']:.1f} s on {device}")
-    state = {"env_id": "consolidated", "obs_dim": pool.obs_dim, "act_dim": pool.act_dim,
-             "td3": agent.config_dict(), "layout": lay.to_dict(), "step": 0,
-             "updates": agent.updates, "sources": [s["path"] for s in specialists],
-             "config": cfg, "consolidation": info}
-    ck_root = os.path.join(out_dir, "checkpoints")
-    with AtomicDir(os.path.join(ck_root, "consolidated"), "checkpoint",
-                   {"consolidated": True}) as tmp:
-        torch.save(agent.state_dict(), os.path.join(tmp, "agent.pt"))
-        with open(os.path.join(tmp, "state.json"), "w") as fh:
-            json.dump(state, fh)
+    _write_agent(os.path.join(ck_root, "consolidated"), agent, state_of(agent, info))
     with open(os.path.join(ck_root, "LATEST.tmp"), "w") as fh:
         fh.write("consolidated\n")
     os.replace(os.path.join(ck_root, "LATEST.tmp"), os.path.join(ck_root, "LATEST"))

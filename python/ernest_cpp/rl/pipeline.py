@@ -9,11 +9,14 @@ kill resumes where it stopped:
    transitions/s, updates/s, last evaluation) is printed every ``progress_every`` seconds from
    the runs' ``progress.json``.
 2. **consolidate**: ``ernest consolidate`` over the specialists (Table 4's consolidation settings
-   unless the pipeline file overrides them), with the table of the consolidated policy against
-   every specialist on every scenario.
-3. **export**: TorchScript export and weights checksum, written to the policy path atomically.
-4. **evaluate**: ``ernest reproduce`` with the new policy over ``evaluate.seeds`` seeds.
-5. **report**: learning curves against wall time (``curves.png``) and ``training.md``.
+   unless the pipeline file overrides them), once per seed in ``consolidate.seeds``, ``parallel``
+   at a time, each keeping its agent every ``keep_every`` iterations (the ``set`` list).
+3. **select**: every kept agent on validation episodes the reports never use
+   (``ernest_cpp.rl.selection``); the best is the policy, and its table against every specialist
+   on every scenario is written beside it. Without a ``select`` section: seed 0's final agent.
+4. **export**: TorchScript export and weights checksum, written to the policy path atomically.
+5. **evaluate**: ``ernest reproduce`` with the new policy over ``evaluate.seeds`` seeds.
+6. **report**: learning curves against wall time (``curves.png``) and ``training.md``.
 
 The pipeline file (YAML, default ``policies/default.yaml``) names the specialists and their
 settings; see that file.
@@ -33,9 +36,9 @@ import time
 import yaml
 
 DEFAULT_FILE = os.path.join("policies", "default.yaml")
-STAGES = ("specialists", "consolidate", "export", "evaluate", "report")
+STAGES = ("specialists", "consolidate", "select", "export", "evaluate", "report")
 _KEYS = {"out", "policy", "parallel", "progress_every", "preset", "specialists", "consolidate",
-         "evaluate"}
+         "select", "evaluate"}
 
 
 def load_pipeline(path: str) -> dict:
@@ -71,6 +74,20 @@ def load_pipeline(path: str) -> dict:
         if extra:
             raise ValueError(f"pipeline specialist {name!r}: unknown key(s) {', '.join(extra)}")
         s.setdefault("set", [])
+    c = out["consolidate"]
+    extra = sorted(set(c) - {"set", "seeds"})
+    if extra:
+        raise ValueError(f"pipeline consolidate: unknown key(s) {', '.join(extra)}; known: seeds, set")
+    seeds = c.setdefault("seeds", [0])
+    if (not isinstance(seeds, list) or not seeds or len(set(seeds)) != len(seeds)
+            or not all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in seeds)):
+        raise ValueError(f"pipeline consolidate.seeds = {seeds!r} must list distinct whole "
+                         f"numbers >= 0")
+    c.setdefault("set", [])
+    if "select" in out:
+        from .selection import check_select
+
+        out["select"] = check_select(out["select"] or {})
     return out
 
 
@@ -172,6 +189,63 @@ def run_specialists(cfg: dict, log=print) -> list[str]:
     return dirs
 
 
+def consolidation_dirs(cfg: dict) -> list[str]:
+    """One consolidation folder per seed: ``consolidated`` for seed 0, ``consolidated-sN``."""
+    return [os.path.join(cfg["out"], "consolidated" if v == 0 else f"consolidated-s{v}")
+            for v in cfg["consolidate"]["seeds"]]
+
+
+def run_consolidations(cfg: dict, dirs: list[str], cons_dirs: list[str], log=print) -> None:
+    """``ernest consolidate`` once per seed, ``parallel`` processes at a time; a seed whose
+    folder holds its final agent is skipped (a killed one starts again: it has no checkpoints
+    to resume from, and takes minutes)."""
+    todo = list(zip(cfg["consolidate"]["seeds"], cons_dirs))
+    running = []
+    while todo or running:
+        while todo and len(running) < cfg["parallel"]:
+            seed, d = todo.pop(0)
+            if os.path.exists(os.path.join(d, "checkpoints", "LATEST")):
+                log(f"  consolidation seed {seed}: done")
+                continue
+            args = ["consolidate", *dirs, "--out", d, "--preset", cfg["preset"],
+                    "--set", "log.progress_bar=false", "--set", f"seed={seed}"]
+            if "select" in cfg:
+                args.append("--no-eval")  # the selected agent's table is written by select
+            for a in cfg["consolidate"]["set"]:
+                args += ["--set", str(a)]
+            log(f"  consolidation seed {seed}: start (log {d}.log)")
+            running.append((_ernest(args, d + ".log"), seed, d))
+        time.sleep(1.0)
+        for item in list(running):
+            proc, seed, d = item
+            rc = proc.poll()
+            if rc is None:
+                continue
+            running.remove(item)
+            if rc != 0:
+                for p, _, _ in running:
+                    p.terminate()
+                raise RuntimeError(f"consolidation seed {seed} failed with exit code {rc} "
+                                   f"(log: {d}.log)")
+            log(f"  consolidation seed {seed}: done")
+
+
+def _select_stage(cfg: dict, log=print) -> None:
+    """Choose among the kept agents (``out/selected.json``, ``out/selection.csv``) and write the
+    chosen one's table against every specialist on every scenario (``out/evaluation.csv``)."""
+    from .checkpoints import agent_from_checkpoint, load_checkpoint
+    from .consolidate import evaluation_table
+    from .selection import select_policy
+
+    out = cfg["out"]
+    chosen = select_policy(consolidation_dirs(cfg), cfg["select"], out, log)
+    # the chosen agent against every specialist on every scenario (consolidated/evaluation.csv)
+    specialists = [load_checkpoint(os.path.join(out, n), with_buffer=False)
+                   for n in cfg["specialists"]]
+    ck = load_checkpoint(chosen, with_buffer=False)
+    evaluation_table(agent_from_checkpoint(ck), specialists, ck["state"]["config"], out, log)
+
+
 def _export(cfg: dict, consolidated: str) -> None:
     policy = cfg["policy"]
     tmp = policy + ".tmp.pt"
@@ -185,25 +259,31 @@ def run_pipeline(cfg: dict, stages=STAGES, log=print) -> None:
     t0 = time.monotonic()
     dirs = [os.path.join(out, n) for n in cfg["specialists"]]
     if "specialists" in stages:
-        log(f"[1/5] specialists: {', '.join(cfg['specialists'])}, {cfg['parallel']} at a time")
+        log(f"[1/6] specialists: {', '.join(cfg['specialists'])}, {cfg['parallel']} at a time")
         dirs = run_specialists(cfg, log)
-    consolidated = os.path.join(out, "consolidated")
+    cons_dirs = consolidation_dirs(cfg)
     if "consolidate" in stages:
-        if os.path.exists(os.path.join(consolidated, "checkpoints", "LATEST")):
-            log("[2/5] consolidate: done")
-        else:
-            log("[2/5] consolidate (seed 004 §4.6, Table 4)")
-            args = ["consolidate", *dirs, "--out", consolidated, "--preset", cfg["preset"],
-                    "--set", "log.progress_bar=false"]
-            for a in cfg["consolidate"].get("set", []):
-                args += ["--set", str(a)]
-            _run(args, "consolidation", consolidated + ".log")
+        log(f"[2/6] consolidate (seed 004 §4.6, Table 4), seeds "
+            f"{', '.join(str(v) for v in cfg['consolidate']['seeds'])}")
+        run_consolidations(cfg, dirs, cons_dirs, log)
+    chosen = os.path.join(cons_dirs[0], "checkpoints", "consolidated")
+    if "select" in cfg:
+        selected = os.path.join(out, "selected.json")
+        if "select" in stages:
+            if os.path.exists(selected):
+                log("[3/6] select: done")
+            else:
+                log("[3/6] select: every kept agent on the validation episodes")
+                _select_stage(cfg, log)
+        if os.path.exists(selected):
+            with open(selected) as fh:
+                chosen = json.load(fh)["checkpoint"]
     if "export" in stages:
-        log(f"[3/5] export -> {cfg['policy']}")
-        _export(cfg, consolidated)
+        log(f"[4/6] export {chosen} -> {cfg['policy']}")
+        _export(cfg, chosen)
     if "evaluate" in stages:
         ev = cfg["evaluate"]
-        log(f"[4/5] evaluate: ernest reproduce over {ev['seeds']} seeds -> {out}/reproduce")
+        log(f"[5/6] evaluate: ernest reproduce over {ev['seeds']} seeds -> {out}/reproduce")
         _run(["reproduce", "--policy", cfg["policy"], "--seeds", str(ev["seeds"]),
               "--sections", str(ev["sections"]), "--out", os.path.join(out, "reproduce")],
              "evaluation", os.path.join(out, "reproduce.log"))
@@ -211,7 +291,7 @@ def run_pipeline(cfg: dict, stages=STAGES, log=print) -> None:
         from .training_report import write_report
 
         path = write_report(cfg, out)
-        log(f"[5/5] report -> {path}")
+        log(f"[6/6] report -> {path}")
     log(f"train-default: finished in {(time.monotonic() - t0) / 60:.1f} min")
 
 

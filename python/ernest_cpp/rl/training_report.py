@@ -71,7 +71,9 @@ def write_report(cfg: dict, out: str) -> str:
                       f"{_fmt(r.get('return'), 1)} | {_fmt(r.get('path_progress'))} | "
                       f"{_fmt(r.get('episode_metrics.travel_reduction'))} |")
         md.append("")
-    table = _rows(os.path.join(out, "consolidated", "evaluation.csv"))
+    table = _rows(os.path.join(out, "evaluation.csv"))  # the selected agent's (select stage)
+    if not table:
+        table = _rows(os.path.join(out, "consolidated", "evaluation.csv"))
     if table:
         md += ["## Consolidated policy against every specialist", "",
                "| environment | policy | return | progress [m] | travel reduction |",

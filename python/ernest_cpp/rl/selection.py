@@ -1,0 +1,185 @@
+"""Choosing the consolidated policy on validation episodes (``ernest train-default``'s select stage).
+
+Consolidation trains a fresh actor–critic on the pooled experience alone (seed 004 §4.6). On our
+pool (about 2e5 transitions, the paper's is 4e6) the offline training swings: the policy a
+thousand iterations earlier or later, or with another seed, may climb the step in none of ten
+seeds instead of seven (``policies/TRAINING.md``). The pipeline therefore keeps the agent every
+``consolidate.keep_every`` iterations of each consolidation seed and picks one here, on episodes
+the reported evaluation never runs: the wheel-high step and the Bickler trap at seeds
+``select.seeds`` (the reports use 0-9) and the 20° slope course at other angles
+(``select.slopes_deg``), on dry M90 and wet sand.
+
+Score, each term between 0 and 1 so that the four targets of the controller count alike: the
+fraction of step episodes with all four wheels up, the fraction of trap episodes crossed, the
+fraction of validation slopes with a lower travel reduction than the crawling gait's, and the
+fraction tracked within ``select.max_lateral`` metres. Ties go to the lower mean slope travel
+reduction.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+import multiprocessing as mp
+
+import numpy as np
+
+SOILS = ("m90", "wet_sand")
+
+
+def validation_courses(sel: dict) -> list[tuple[str, str, dict, str | None, list[int]]]:
+    """(label, env id, kwargs, obstacle kind, seeds) of every validation course."""
+    lo, hi = sel["seeds"]
+    seeds = list(range(int(lo), int(hi)))
+    out = [("step", "ernest/WheelStep-v0", {}, "step", seeds),
+           ("trap", "ernest/BicklerTrap-v0", {}, "bickler", seeds)]
+    for deg in sel["slopes_deg"]:
+        for soil in SOILS:
+            out.append((f"slope {deg:g} {soil}", "ernest/SlopeEval-v0",
+                        {"soil": soil, "randomisation": {"eval_slope_deg": float(deg)}}, None, [0]))
+    return out
+
+
+def check_select(sel: dict) -> dict:
+    """The ``select`` section with its defaults, validated."""
+    out = {"seeds": [100, 120], "slopes_deg": [18.0, 22.0], "max_lateral": 0.3, "workers": 2}
+    unknown = sorted(set(sel) - set(out))
+    if unknown:
+        raise ValueError(f"pipeline select: unknown key(s) {', '.join(unknown)}; known: "
+                         f"{', '.join(sorted(out))}")
+    out.update(sel)
+    s = out["seeds"]
+    if (not isinstance(s, list) or len(s) != 2 or not all(isinstance(v, int) for v in s)
+            or not 0 <= s[0] < s[1]):
+        raise ValueError(f"pipeline select.seeds = {s!r} must be [first, end) with 0 <= first < end")
+    if not 10 <= s[0]:
+        raise ValueError(f"pipeline select.seeds = {s!r} must not overlap the reported seeds "
+                         f"0-9: start at 10 or above")
+    d = out["slopes_deg"]
+    if not isinstance(d, list) or not d or not all(
+            isinstance(v, (int, float)) and 0 < v <= 45 and v != 20 for v in d):
+        raise ValueError(f"pipeline select.slopes_deg = {d!r} must list angles in (0, 45] other "
+                         f"than the reported 20")
+    if not (isinstance(out["max_lateral"], (int, float)) and out["max_lateral"] > 0):
+        raise ValueError(f"pipeline select.max_lateral = {out['max_lateral']!r} must be > 0 [m]")
+    w = out["workers"]
+    if isinstance(w, bool) or not isinstance(w, int) or w < 1:
+        raise ValueError(f"pipeline select.workers = {w!r} must be a whole number >= 1")
+    return out
+
+
+def _episode(policy, env_id: str, kwargs: dict, kind: str | None, seed: int,
+             passive: bool = False) -> tuple[float, float, bool]:
+    """(travel reduction, largest |lateral deviation| [m], all four wheels over)."""
+    from .. import evaluate as ev
+    from ..reproduce import wheels_over
+
+    m, hist, env, _ = ev.run_episode(env_id, kwargs, policy, passive, seed)
+    lat = max(abs(env.scenario.path.lateral_deviation(h["position"][0], h["position"][1]))
+              for h in hist)
+    over = bool(kind) and wheels_over(kind, env) == 4
+    return float(m["travel_reduction"]), float(lat), over
+
+
+def course_results(policy, courses) -> dict:
+    """{label: {"crossed": fraction or None, "tr": mean travel reduction, "lat": largest
+    lateral deviation}} of ``policy(obs, env)`` (reset before each episode if it has ``reset``)
+    on every course."""
+    out = {}
+    for label, env_id, kwargs, kind, seeds in courses:
+        runs = [_episode(policy, env_id, kwargs, kind, s) for s in seeds]
+        out[label] = {"crossed": np.mean([r[2] for r in runs]) if kind else None,
+                      "tr": float(np.mean([r[0] for r in runs])),
+                      "lat": float(max(r[1] for r in runs))}
+    return out
+
+
+def score(res: dict, crawling: dict, max_lateral: float) -> float:
+    slopes = [k for k in res if res[k]["crossed"] is None]
+    below = np.mean([res[k]["tr"] < crawling[k]["tr"] for k in slopes])
+    tracked = np.mean([res[k]["lat"] <= max_lateral for k in slopes])
+    return float(res["step"]["crossed"] + res["trap"]["crossed"] + below + tracked)
+
+
+def _candidate(path: str, courses) -> dict:
+    import torch
+
+    from .checkpoints import agent_from_checkpoint, load_checkpoint
+
+    torch.set_num_threads(1)
+    agent = agent_from_checkpoint(load_checkpoint(path, with_buffer=False))
+    t0 = time.perf_counter()
+    res = course_results(lambda obs, env=None: agent.act(obs), courses)
+    return {"path": path, "results": res, "seconds": time.perf_counter() - t0}
+
+
+def candidates(dirs: list[str]) -> list[str]:
+    """Every kept agent (``iteration-N``) and the final one of each consolidation folder."""
+    out = []
+    for d in dirs:
+        root = os.path.join(d, "checkpoints")
+        names = sorted(n for n in os.listdir(root) if n.startswith("iteration-"))
+        out += [os.path.join(root, n) for n in names] + [os.path.join(root, "consolidated")]
+    return out
+
+
+def _iteration(path: str) -> int:
+    with open(os.path.join(path, "state.json")) as fh:
+        return int(json.load(fh)["consolidation"]["iterations"])
+
+
+def select_policy(dirs: list[str], sel: dict, out: str, log=print) -> str:
+    """Evaluate every candidate of the consolidation folders ``dirs``; write
+    ``out/selection.csv`` (all of them) and ``out/selected.json``; return the chosen checkpoint."""
+    from ..envs.baselines import CrawlingGaitController
+
+    sel = check_select(sel)
+    courses = validation_courses(sel)
+    slopes = [c for c in courses if c[3] is None]
+    crawling = course_results(CrawlingGaitController(), slopes)
+    paths = candidates(dirs)
+    log(f"  {len(paths)} candidates, {len(courses)} validation courses "
+        f"(step and trap seeds {sel['seeds'][0]}-{sel['seeds'][1] - 1}), {sel['workers']} workers")
+    rows, t0 = [], time.perf_counter()
+    with ProcessPoolExecutor(sel["workers"], mp_context=mp.get_context("spawn")) as pool:
+        for r in pool.map(_candidate, paths, [courses] * len(paths)):
+            res = r["results"]
+            row = {"candidate": os.path.relpath(r["path"], out), "iteration": _iteration(r["path"]),
+                   "score": score(res, crawling, sel["max_lateral"])}
+            for label, v in res.items():
+                if v["crossed"] is not None:
+                    row[f"{label} crossed"] = v["crossed"]
+                else:
+                    row[f"{label} TR"] = v["tr"]
+                    row[f"{label} lateral [m]"] = v["lat"]
+            row["slope TR mean"] = float(np.mean([res[c[0]]["tr"] for c in slopes]))
+            rows.append(row)
+            log(f"  {row['candidate']}: score {row['score']:.2f} (step {res['step']['crossed']:.2f}"
+                f", trap {res['trap']['crossed']:.2f}), {len(rows)}/{len(paths)}, "
+                f"{time.perf_counter() - t0:.0f} s")
+    best = max(rows, key=lambda r: (r["score"], -r["slope TR mean"]))
+    crawl_row = {"candidate": "crawling gait (reference)", "iteration": "", "score": ""}
+    for label, v in crawling.items():
+        crawl_row[f"{label} TR"], crawl_row[f"{label} lateral [m]"] = v["tr"], v["lat"]
+    keys = list(rows[0])
+    tmp = os.path.join(out, "selection.csv.tmp")
+    with open(tmp, "w", newline="") as fh:
+        w = csv.DictWriter(fh, keys, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows + [crawl_row])
+    os.replace(tmp, os.path.join(out, "selection.csv"))
+    chosen = os.path.join(out, best["candidate"])
+    tmp = os.path.join(out, "selected.json.tmp")
+    with open(tmp, "w") as fh:
+        json.dump({"checkpoint": chosen, "score": best["score"], "iteration": best["iteration"],
+                   "select": sel}, fh, indent=1)
+    os.replace(tmp, os.path.join(out, "selected.json"))
+    log(f"  chosen: {best['candidate']} (score {best['score']:.2f})")
+    return chosen
+
+
+__all__ = ["select_policy", "check_select", "validation_courses", "course_results", "score",
+           "candidates"]
