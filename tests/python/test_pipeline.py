@@ -72,19 +72,24 @@ def test_pipeline_selects_among_kept_agents_on_validation_episodes(tmp_path):
             for n in ("iteration-00000010", "consolidated")}
     rows = list(csv.DictReader(open(os.path.join(out, "selection.csv"))))
     assert {r["candidate"] for r in rows[:-1]} == kept and rows[-1]["candidate"].startswith("crawl")
-    for r in rows[:-1]:  # score = step + trap crossings + slopes below crawling + slopes tracked
+    crawl = rows[-1]
+    for r in rows[:-1]:  # targets met on the validation episodes, as selection documents them
         slopes = ["slope 18 m90", "slope 18 wet_sand"]
-        below = sum(float(r[f"{k} TR"]) < float(rows[-1][f"{k} TR"]) for k in slopes) / 2
-        tracked = sum(float(r[f"{k} lateral [m]"]) <= 0.3 for k in slopes) / 2
-        expect = float(r["step crossed"]) + float(r["trap crossed"]) + below + tracked
-        assert float(r["score"]) == pytest.approx(expect)
-    best = max(rows[:-1], key=lambda r: (float(r["score"]), -float(r["slope TR mean"])))
+        below = all(float(r[f"{k} TR"]) < float(crawl[f"{k} TR"]) for k in slopes)
+        tracked = all(float(r[f"{k} lateral [m]"]) <= 0.3 for k in slopes)
+        step, trap = float(r["step crossed"]), float(r["trap crossed"])
+        assert int(r["targets met"]) == (step >= 0.8) + (trap >= 0.8) + below + tracked
+        assert float(r["crossings"]) == pytest.approx(step + trap)
+    best = max(rows[:-1], key=lambda r: (int(r["targets met"]), float(r["crossings"]),
+                                         -float(r["slope TR mean"])))
     chosen = json.load(open(os.path.join(out, "selected.json")))["checkpoint"]
     assert chosen == os.path.join(out, best["candidate"])
     assert any("[4/6] export " + chosen in ln for ln in lines)
     load_policy(cfg["policy"])
-    assert "Consolidated policy against every specialist" in open(
-        os.path.join(out, "training.md")).read()  # the chosen agent's table (out/evaluation.csv)
+    report = open(os.path.join(out, "training.md")).read()
+    assert "Consolidated policy against every specialist" in report  # the chosen agent's table
+    assert "Choosing the policy on validation episodes" in report
+    assert f"| {best['candidate']} | {best['targets met']} |" in report  # first row: the policy
     again: list[str] = []
     P.run_pipeline(cfg, stages=("consolidate", "select"), log=again.append)
     assert "  consolidation seed 3: done" in again and "[3/6] select: done" in again
@@ -116,6 +121,7 @@ def test_pipeline_resumes_an_interrupted_specialist(tmp_path):
     ({"select": {"slopes_deg": [20]}}, "other than the reported 20"),
     ({"select": {"max_lateral": 0}}, "max_lateral"),
     ({"select": {"workers": 0}}, "workers"),
+    ({"select": {"min_crossed": 1.5}}, "min_crossed"),
     ({"select": {"colour": 1}}, "unknown key")])
 def test_bad_pipeline_files_are_refused(tmp_path, over, match):
     with pytest.raises(ValueError, match=match):
@@ -126,3 +132,14 @@ def test_the_committed_pipeline_file_is_valid():
     here = os.path.dirname(__file__)
     cfg = P.load_pipeline(os.path.join(here, "..", "..", "policies", "default.yaml"))
     assert set(cfg["specialists"]) >= {"step", "slope", "rockfield", "ripples"}
+
+
+@pytest.mark.parametrize("c, match", [
+    ({"keep_every": -1}, "keep_every"), ({"keep_every": 1.5}, "keep_every"),
+    ({"keep_from": 11}, "at most consolidate.iterations"), ({"keep_from": True}, "keep_from")])
+def test_bad_keep_settings_are_refused(c, match):
+    from ernest_cpp.rl.consolidate import keep_settings
+
+    with pytest.raises(ValueError, match=match):
+        keep_settings({"iterations": 10, **c})
+    assert keep_settings({"iterations": 10, "keep_every": 5, "keep_from": 5}) == (5, 5)

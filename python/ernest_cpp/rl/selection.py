@@ -9,11 +9,12 @@ the reported evaluation never runs: the wheel-high step and the Bickler trap at 
 ``select.seeds`` (the reports use 0-9) and the 20° slope course at other angles
 (``select.slopes_deg``), on dry M90 and wet sand.
 
-Score, each term between 0 and 1 so that the four targets of the controller count alike: the
-fraction of step episodes with all four wheels up, the fraction of trap episodes crossed, the
-fraction of validation slopes with a lower travel reduction than the crawling gait's, and the
-fraction tracked within ``select.max_lateral`` metres. Ties go to the lower mean slope travel
-reduction.
+Ranking: first the number of the controller's four targets a candidate meets on these
+episodes (all four wheels up the step in at least ``select.min_crossed`` of the episodes; across
+the trap in as many; a lower travel reduction than the crawling gait's on every validation slope;
+tracked within ``select.max_lateral`` metres on every one), then the obstacle crossings (the
+paper's headline: the fractions of step and trap episodes crossed, summed), then the lower mean
+slope travel reduction.
 """
 
 from __future__ import annotations
@@ -45,7 +46,8 @@ def validation_courses(sel: dict) -> list[tuple[str, str, dict, str | None, list
 
 def check_select(sel: dict) -> dict:
     """The ``select`` section with its defaults, validated."""
-    out = {"seeds": [100, 120], "slopes_deg": [18.0, 22.0], "max_lateral": 0.3, "workers": 2}
+    out = {"seeds": [100, 120], "slopes_deg": [18.0, 22.0], "max_lateral": 0.3,
+           "min_crossed": 0.8, "workers": 2}
     unknown = sorted(set(sel) - set(out))
     if unknown:
         raise ValueError(f"pipeline select: unknown key(s) {', '.join(unknown)}; known: "
@@ -65,6 +67,8 @@ def check_select(sel: dict) -> dict:
                          f"than the reported 20")
     if not (isinstance(out["max_lateral"], (int, float)) and out["max_lateral"] > 0):
         raise ValueError(f"pipeline select.max_lateral = {out['max_lateral']!r} must be > 0 [m]")
+    if not (isinstance(out["min_crossed"], (int, float)) and 0 < out["min_crossed"] <= 1):
+        raise ValueError(f"pipeline select.min_crossed = {out['min_crossed']!r} must be in (0, 1]")
     w = out["workers"]
     if isinstance(w, bool) or not isinstance(w, int) or w < 1:
         raise ValueError(f"pipeline select.workers = {w!r} must be a whole number >= 1")
@@ -97,11 +101,21 @@ def course_results(policy, courses) -> dict:
     return out
 
 
-def score(res: dict, crawling: dict, max_lateral: float) -> float:
+def score(res: dict, crawling: dict, sel: dict) -> dict:
+    """The ranking's terms: targets met (0-4), obstacle crossings (0-2), mean slope travel
+    reduction."""
     slopes = [k for k in res if res[k]["crossed"] is None]
-    below = np.mean([res[k]["tr"] < crawling[k]["tr"] for k in slopes])
-    tracked = np.mean([res[k]["lat"] <= max_lateral for k in slopes])
-    return float(res["step"]["crossed"] + res["trap"]["crossed"] + below + tracked)
+    met = (int(res["step"]["crossed"] >= sel["min_crossed"])
+           + int(res["trap"]["crossed"] >= sel["min_crossed"])
+           + int(all(res[k]["tr"] < crawling[k]["tr"] for k in slopes))
+           + int(all(res[k]["lat"] <= sel["max_lateral"] for k in slopes)))
+    return {"targets met": met, "crossings": float(res["step"]["crossed"] + res["trap"]["crossed"]),
+            "slope TR mean": float(np.mean([res[k]["tr"] for k in slopes]))}
+
+
+def rank_key(row: dict) -> tuple:
+    """Larger is better: targets met, then crossings, then the lower slope travel reduction."""
+    return (row["targets met"], row["crossings"], -row["slope TR mean"])
 
 
 def _candidate(path: str, courses) -> dict:
@@ -148,38 +162,39 @@ def select_policy(dirs: list[str], sel: dict, out: str, log=print) -> str:
         for r in pool.map(_candidate, paths, [courses] * len(paths)):
             res = r["results"]
             row = {"candidate": os.path.relpath(r["path"], out), "iteration": _iteration(r["path"]),
-                   "score": score(res, crawling, sel["max_lateral"])}
+                   **score(res, crawling, sel)}
             for label, v in res.items():
                 if v["crossed"] is not None:
                     row[f"{label} crossed"] = v["crossed"]
                 else:
                     row[f"{label} TR"] = v["tr"]
                     row[f"{label} lateral [m]"] = v["lat"]
-            row["slope TR mean"] = float(np.mean([res[c[0]]["tr"] for c in slopes]))
             rows.append(row)
-            log(f"  {row['candidate']}: score {row['score']:.2f} (step {res['step']['crossed']:.2f}"
-                f", trap {res['trap']['crossed']:.2f}), {len(rows)}/{len(paths)}, "
-                f"{time.perf_counter() - t0:.0f} s")
-    best = max(rows, key=lambda r: (r["score"], -r["slope TR mean"]))
-    crawl_row = {"candidate": "crawling gait (reference)", "iteration": "", "score": ""}
+            log(f"  {row['candidate']}: {row['targets met']} targets met, step "
+                f"{res['step']['crossed']:.2f}, trap {res['trap']['crossed']:.2f}, "
+                f"{len(rows)}/{len(paths)}, {time.perf_counter() - t0:.0f} s")
+    best = max(rows, key=rank_key)
+    crawl_row = {"candidate": "crawling gait (reference)"}
     for label, v in crawling.items():
         crawl_row[f"{label} TR"], crawl_row[f"{label} lateral [m]"] = v["tr"], v["lat"]
     keys = list(rows[0])
     tmp = os.path.join(out, "selection.csv.tmp")
     with open(tmp, "w", newline="") as fh:
-        w = csv.DictWriter(fh, keys, extrasaction="ignore")
+        w = csv.DictWriter(fh, keys, restval="", extrasaction="ignore")
         w.writeheader()
         w.writerows(rows + [crawl_row])
     os.replace(tmp, os.path.join(out, "selection.csv"))
     chosen = os.path.join(out, best["candidate"])
     tmp = os.path.join(out, "selected.json.tmp")
     with open(tmp, "w") as fh:
-        json.dump({"checkpoint": chosen, "score": best["score"], "iteration": best["iteration"],
-                   "select": sel}, fh, indent=1)
+        json.dump({"checkpoint": chosen, "targets met": best["targets met"],
+                   "crossings": best["crossings"], "iteration": best["iteration"], "select": sel},
+                  fh, indent=1)
     os.replace(tmp, os.path.join(out, "selected.json"))
-    log(f"  chosen: {best['candidate']} (score {best['score']:.2f})")
+    log(f"  chosen: {best['candidate']} ({best['targets met']} targets met, crossings "
+        f"{best['crossings']:.2f})")
     return chosen
 
 
 __all__ = ["select_policy", "check_select", "validation_courses", "course_results", "score",
-           "candidates"]
+           "rank_key", "candidates"]

@@ -8,6 +8,33 @@ import csv
 import os
 
 
+def _selection_section(out: str, top: int = 10) -> list[str]:
+    """The select stage's best candidates (``selection.csv``; the last row is the crawling gait's
+    reference) with the chosen one marked."""
+    rows = _rows(os.path.join(out, "selection.csv"))
+    if len(rows) < 2:
+        return []
+    ref, rows = rows[-1], rows[:-1]
+    slopes = [k[:-3] for k in rows[0] if k.endswith(" TR") and k != "slope TR mean"]
+    rows.sort(key=lambda r: (-r["targets met"], -r["crossings"], r["slope TR mean"]))
+    md = ["## Choosing the policy on validation episodes", "",
+          f"{len(rows)} kept consolidation agents, best {min(top, len(rows))} "
+          f"(`ernest_cpp.rl.selection`: targets met, then step and trap crossings, then slope "
+          f"travel reduction; the first row is the policy). Step and trap: fraction of "
+          f"episodes crossed; slopes: travel reduction / largest lateral deviation [m]; "
+          f"crawling gait: "
+          + ", ".join(f"{k} {_fmt(ref[k + ' TR'])} / {_fmt(ref[k + ' lateral [m]'])}"
+                      for k in slopes) + ".", "",
+          "| candidate | targets met | step | trap | " + " | ".join(slopes) + " |",
+          "|---|---|---|---|" + "---|" * len(slopes)]
+    for r in rows[:top]:
+        md.append(f"| {r['candidate']} | {int(r['targets met'])} | {_fmt(r['step crossed'])} | "
+                  f"{_fmt(r['trap crossed'])} | " + " | ".join(
+                      f"{_fmt(r[k + ' TR'])} / {_fmt(r[k + ' lateral [m]'])}" for k in slopes)
+                  + " |")
+    return md + [""]
+
+
 def _rows(path: str) -> list[dict]:
     try:
         with open(path, newline="") as fh:
@@ -83,6 +110,7 @@ def write_report(cfg: dict, out: str) -> str:
                       f"{_fmt(r.get('path_progress'))} | "
                       f"{_fmt(r.get('episode_metrics.travel_reduction'))} |")
         md.append("")
+    md += _selection_section(out)
     rep = os.path.join(out, "reproduce", "report.md")
     if os.path.exists(rep):
         md += ["## Evaluation of the exported policy", "", f"See `{rep}`.", ""]
