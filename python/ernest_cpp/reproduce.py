@@ -40,10 +40,11 @@ REASONS: dict[str, str] = {
                          "the stalled rover drifts back at ~5 mm/s, where eq 12's factor "
                          "1 - exp(-eps_slip vx^2) caps |s| at 0.2 (measured s = -0.205 on every "
                          "wheel), so the rover never reaches the rig's pull",
-    "004.s5.step.learned": "the committed policy gets all four wheels up the 0.34 m step in 7 "
-                           "of 10 seeds (seeds 0-9); in the others its rear wheels stay below "
-                           "(2 of 4 over); the specialist it was consolidated from swung between "
-                           "10/10 and 1/10 across checkpoints (policies/TRAINING.md)",
+    "004.s5.step.learned": "the committed policy gets all four wheels up the 0.34 m step in 10 "
+                           "of 10 seeds at the default physics step and 9 of 10 at a quarter of "
+                           "it (seeds 0-9); where it fails, a rear wheel stays below; other "
+                           "consolidated agents of the same specialists climb it in 0-7 of 10 "
+                           "(policies/TRAINING.md)",
 }
 
 #: What a missing reason says (the row id tells which key of ``REASONS`` to fill).
