@@ -10,6 +10,7 @@ import os
 
 import numpy as np
 import pytest
+import yaml
 import torch
 
 torch.set_num_threads(1)
@@ -499,6 +500,17 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "layout ernest-obs-v2" in out and "FTS noise on 24 components" in out
     assert os.path.isdir(os.path.join(run, "tb"))  # TensorBoard logs
+    capsys.readouterr()
+    # --resume with no more steps than done is refused (exit 2, one line naming both counts)
+    assert cli.main(["train", "--run-dir", run, "--resume", "--steps", "300"]) == 2
+    assert "has done 300 transitions already" in capsys.readouterr().err
+    # --print-config: the resolved settings (the run's, with the command line's) and no training
+    assert cli.main(["train", "--run-dir", run, "--resume", "--steps", "400",
+                     "--set", "td3.batch_size=64", "--print-config"]) == 0
+    printed = yaml.safe_load(capsys.readouterr().out)
+    assert printed["total_steps"] == 400 and printed["td3"]["batch_size"] == 64
+    assert printed["td3"]["hidden"] == 32
+    assert load_checkpoint(run, with_buffer=False)["state"]["step"] == 300
     assert cli.main(["train", "--run-dir", run, "--resume", "--steps", "400"]) == 0
     assert load_checkpoint(run, with_buffer=False)["state"]["step"] == 400
     assert cli.main(["export", run, "--out", str(tmp_path / "p.pt")]) == 0

@@ -34,6 +34,15 @@ def _settings_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", metavar="YAML", help="YAML file overriding the preset")
     p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[],
                    help="override one setting, e.g. --set td3.batch_size=256 (repeatable)")
+    p.add_argument("--print-config", action="store_true",
+                   help="print the settings this command would use (YAML) and exit")
+
+
+def _print_config(cfg: dict) -> int:
+    import yaml
+
+    print(yaml.safe_dump(cfg, sort_keys=False), end="")
+    return 0
 
 
 def _build(args, extra: dict | None = None) -> dict:
@@ -75,7 +84,11 @@ def _train(args) -> int:
         if args.config:
             raise ValueError("--resume continues with the run's saved settings; use --set to "
                              "change one")
-        cfg = load_checkpoint(args.run_dir, with_buffer=False)["state"]["config"]
+        state = load_checkpoint(args.run_dir, with_buffer=False)["state"]
+        cfg = state["config"]
+        if args.steps is not None and args.steps <= state["step"]:
+            raise ValueError(f"--steps {args.steps}: the run in {args.run_dir} has done "
+                             f"{state['step']} transitions already; give more to continue")
         from .config import load_preset
 
         # Settings newer than the run (ray, learner_device, demos) get the quick preset's values,
@@ -95,6 +108,8 @@ def _train(args) -> int:
 
         cfg = merge(cfg, {"env": {"num_envs": cfg["ray"]["num_workers"] *
                                   cfg["ray"]["envs_per_worker"]}})
+    if args.print_config:
+        return _print_config(cfg)
     env_id = resolve_env_id(cfg["env"])
     run_dir = args.run_dir or os.path.join(
         "runs", f"{re.sub(r'[^A-Za-z0-9_.-]+', '_', env_id)}-seed{cfg['seed']}")
@@ -122,6 +137,8 @@ def _consolidate(args) -> int:
     from .consolidate import consolidate_runs
 
     cfg = _build(args)
+    if args.print_config:
+        return _print_config(cfg)
     print(f"consolidating {len(args.runs)} runs -> {args.out}")
     ray = None
     if args.backend == "ray":
