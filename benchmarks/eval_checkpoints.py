@@ -4,6 +4,10 @@ travel reduction on the 20 deg slopes, against the training run's wall time.
 
     python benchmarks/eval_checkpoints.py runs/abl/B_demo60 [more runs] --seeds 10 \
         --courses step,bickler --out runs/abl/table.md
+    python benchmarks/eval_checkpoints.py runs/default/consolidated-s3 --first-seed 100 --seeds 20
+
+A consolidation folder lists its kept agents (``iteration-N``, ``consolidate.keep_every``) and its
+final one, with the iterations in the transitions column.
 
 A course row counts a seed as crossed when all four wheels end over the obstacle
 (``reproduce.wheels_over``).
@@ -13,12 +17,14 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import time
 
 from eval_policy import row  # the same episodes and figures as the exported policy's table
 
 from ernest_cpp.rl.checkpoints import STEP_DIR, agent_from_checkpoint, load_checkpoint
 
+ITERATION_DIR = re.compile(r"^iteration-\d+$")
 COURSES = {  # name: (env id, kwargs, obstacle kind for wheels_over or None)
     "step": ("ernest/WheelStep-v0", {}, "step"),
     "bickler": ("ernest/BicklerTrap-v0", {}, "bickler"),
@@ -27,10 +33,10 @@ COURSES = {  # name: (env id, kwargs, obstacle kind for wheels_over or None)
 }
 
 
-def course_result(policy, course: str, seeds: int) -> dict:
+def course_result(policy, course: str, seeds: int, first_seed: int = 0) -> dict:
     """``eval_policy.row`` for a policy on normalised observations (a checkpoint's actor)."""
     env_id, kwargs, kind = COURSES[course]
-    return row(env_id, kwargs, kind, lambda obs, env=None: policy(obs), False, seeds)
+    return row(env_id, kwargs, kind, lambda obs, env=None: policy(obs), False, seeds, first_seed)
 
 
 def kind_of(course: str) -> str | None:
@@ -42,6 +48,10 @@ def checkpoints(run: str) -> list[str]:
     if not os.path.isdir(root):  # a checkpoint folder itself
         return [run]
     names = sorted((d for d in os.listdir(root) if STEP_DIR.match(d)), key=lambda d: int(d[5:]))
+    # a consolidation folder: its kept agents (iteration-N) and its final one
+    kept = sorted(d for d in os.listdir(root) if ITERATION_DIR.match(d))
+    if kept or os.path.isdir(os.path.join(root, "consolidated")):
+        names = kept + ["consolidated"] * os.path.isdir(os.path.join(root, "consolidated"))
     return [os.path.join(root, d) for d in names] or [run]
 
 
@@ -49,6 +59,8 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("runs", nargs="+")
     p.add_argument("--seeds", type=int, default=10)
+    p.add_argument("--first-seed", type=int, default=0,
+                   help="seeds first..first+seeds-1 (e.g. 100: the select stage's validation seeds)")
     p.add_argument("--courses", default="step")
     p.add_argument("--last", action="store_true", help="only each run's newest checkpoint")
     p.add_argument("--out", help="append the markdown rows to this file")
@@ -71,10 +83,11 @@ def main() -> None:
             st = ck["state"]
             cells = []
             for c in courses:
-                r = course_result(agent.act, c, a.seeds)
+                r = course_result(agent.act, c, a.seeds, a.first_seed)
                 cells.append(f"{r['crossed']}/{a.seeds} / {r['progress']:.2f}" if kind_of(c)
                              else f"{r['tr']:.1f} % / {r['lat']:.2f} m")
-            row = (f"| {os.path.basename(os.path.normpath(run))} | {st['step']} | "
+            done = st.get("consolidation", {}).get("iterations", st["step"])  # or iterations
+            row = (f"| {os.path.basename(os.path.normpath(run))} | {done} | "
                    f"{st.get('elapsed', float('nan')) / 60:.1f} | " + " | ".join(cells) + " |")
             lines.append(row)
             print(row, f"({time.perf_counter() - t0:.0f} s)", flush=True)

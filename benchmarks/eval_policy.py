@@ -28,13 +28,13 @@ SCENARIOS = [  # (label, env id, kwargs, obstacle kind or None)
 DT = 0.0125  # the environments' default physics step [s]
 
 
-def row(env_id, kwargs, kind, ctrl, passive, seeds) -> dict:
-    """Means over seeds 0..seeds-1 of ``ctrl(obs, env)``: progress [m], travel reduction ``tr``
+def row(env_id, kwargs, kind, ctrl, passive, seeds, first_seed=0) -> dict:
+    """Means over seeds first_seed..first_seed+seeds-1 of ``ctrl(obs, env)``: progress [m], travel reduction ``tr``
     [%], cost of transport (inf if any episode made no progress), the largest lateral deviation
     ``lat`` [m] over all seeds, and (with an obstacle ``kind``) the seeds with all four wheels
     over."""
     prog, tr, cot, lat, crossed = [], [], [], [], 0
-    for s in range(seeds):
+    for s in range(first_seed, first_seed + seeds):
         m, hist, env, info = ev.run_episode(env_id, kwargs, ctrl, passive, s)
         prog.append(float(info["path_progress"]))
         tr.append(float(m["travel_reduction"]))
