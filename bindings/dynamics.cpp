@@ -227,7 +227,7 @@ void bind_dynamics(py::module_& m) {
       .def_readwrite("slip_warm_start", &SimOptions::slip_warm_start,
                      "implicit slip's first guess from the last steps (soil-row levels "
                      "extrapolated, the last slip offset over eq 12); False: eq 12 at the step's "
-                     "start and the last levels (before session 10)")
+                     "start and the last levels")
       .def_readwrite("obstacle_substeps", &SimOptions::obstacle_substeps,
                      "a step in which a wheel touches an obstacle is taken as this many substeps "
                      "of dt / n (the §3.4 contact is under-resolved at the default step); 1 = none")

@@ -1,4 +1,4 @@
-// Ctrl-C inside long C++ calls (issue 18). A binding that releases the GIL for a long call opens
+// Ctrl-C inside long C++ calls. A binding that releases the GIL for a long call opens
 // an interrupt scope after releasing it:
 //   py::call_guard<py::gil_scoped_release, ernest::bindings::interruptible>()
 // or, inside a lambda, `py::gil_scoped_release release; interruptible scope;`. The C++ loops poll

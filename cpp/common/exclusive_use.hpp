@@ -1,6 +1,6 @@
 // One object, one thread at a time: a guard that refuses (instead of waiting) when another thread
 // is inside a method of the same object. The Python bindings release the GIL in long calls, so
-// two Python threads could otherwise step one simulator at once and crash the process (issue 18).
+// two Python threads could otherwise step one simulator at once and crash the process.
 #pragma once
 
 #include <atomic>

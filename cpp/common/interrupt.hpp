@@ -1,4 +1,4 @@
-// Cooperative interruption of long calls (issue 18: Ctrl-C was ignored for 32 s inside
+// Cooperative interruption of long calls (without it Ctrl-C would wait for the whole call, e.g.
 // RoverSim.step_n(3e6)). Long loops call poll_interrupt() between units of work that leave their
 // object consistent (a physics step, an objective evaluation, an image row). Outside an
 // InterruptScope it does nothing but read one thread_local pointer. Inside one, the thread that

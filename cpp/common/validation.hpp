@@ -44,7 +44,7 @@ inline void require_finite(const char* owner, const char* field, double value) {
 
 /// Throws std::invalid_argument with a free-form message when `ok` is false. A literal message
 /// picks this overload: nothing is built unless the check fails, so it is free in hot loops (the
-/// 400 Hz runtime loop calls FtsProcessor::update every tick; issue 17 item 6).
+/// 400 Hz runtime loop calls FtsProcessor::update every tick and must not allocate).
 inline void require(bool ok, const char* message) {
   if (!ok) throw std::invalid_argument(message);
 }

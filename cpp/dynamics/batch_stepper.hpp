@@ -22,7 +22,7 @@ class BatchStepper {
   /// thread steps a rover: every rover owns its ODE world and solver data. The costliest rovers
   /// of the last call (its constraint solves: a rover stalled on a rock stays costly) are handed
   /// out first, so that a long rover does not start last while the other thread idles (longest
-  /// first: benchmarks/RESULTS.md, "Batch scaling").
+  /// first: benchmarks/RESULTS.md, "One rover, and the batched stepper").
   BatchStepper(std::vector<std::shared_ptr<RoverSim>> sims, int threads);
   BatchStepper(const BatchStepper&) = delete;
   BatchStepper& operator=(const BatchStepper&) = delete;

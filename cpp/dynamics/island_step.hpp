@@ -2,7 +2,7 @@
 // computes for the rover's six bodies and the joint types it uses, built for this structure and
 // solved through the sparse solver (solve_sparse, ode_lcp.hpp) directly (internal to cpp/dynamics).
 //
-// Why (benchmarks/RESULTS.md, "Session 11: our own island step"): a time profile put ODE's own
+// Why (benchmarks/RESULTS.md, "Where a step goes"): a time profile put ODE's own
 // part of dWorldStep at ~45 % of a step on flat soil, of which forming A = J M⁻¹ Jᵀ joint pair by
 // joint pair in scalar code alone was 15 %; ODE also rebuilds J, A and the right-hand side for
 // every attempt of a step (implicit-slip re-solves, guess retries) though J and M are the same.

@@ -244,11 +244,10 @@ void RoverSim::Impl::prepare_obstacles() {
   // Broad phase: the rover's bounding box against each obstacle's (static: taken once by
   // build()), then each rover geom's box against it, and for a wheel the exact early-outs of
   // cylinder_box_disjoint(); ODE's collider (near()) only for what remains. dSpaceCollide2 of the
-  // two simple spaces tested every rover geom against every obstacle (6 x 100 box tests a call:
-  // 10 % of a step among 100 rocks, benchmarks/RESULTS.md, "Rock contacts without substeps"); of
-  // the rover's space against each overlapping obstacle, its boxes and call overhead still cost
-  // 2.5k instructions a step, and a quarter of its cylinder-box calls among 20 rocks found no
-  // contact (RESULTS.md, "Session 10: collision"). The geoms' boxes here are ODE's own formulas
+  // two simple spaces would test every rover geom against every obstacle (6 x 100 box tests a
+  // call: 10 % of a step among 100 rocks); of the rover's space against each overlapping
+  // obstacle, its boxes and call overhead would cost 2.5k instructions a step, and a quarter of
+  // ODE's cylinder-box calls among 20 rocks find no contact. The geoms' boxes here are ODE's own formulas
   // (a box's, a cylinder's projection on each axis: exact) without cleaning ODE's space, and
   // kDisjointMargin wider: disjoint boxes prove disjoint shapes, where ODE finds no point.
   // The geoms are visited in a fixed order (chassis, bogie, wheels), the contacts in that order.
@@ -390,8 +389,8 @@ void RoverSim::Impl::step() {
   // from growth to reversal and the step's equation in sigma has several roots, and neither it
   // nor the explicit slip (rover_step.cpp) follows a wheel that starts to surge up an obstacle's
   // face: the surge aborts, and a wheel left at v_x -> 0 with eq 12's slip ~ eps v_x^2 (no feedback)
-  // stays there spinning (benchmarks/RESULTS.md, "One substep at every step size").
-  constexpr double kMaxSplit = 8.0;  // the substeps every obstacle step took before session 9
+  // stays there spinning (benchmarks/RESULTS.md, "Step size and step independence").
+  constexpr double kMaxSplit = 8.0;  // at most 8 substeps
   if (n == 1 && touching && 2.0 * opt.dt * slip_rate >= 1.0)
     n = static_cast<int>(std::min(kMaxSplit, std::ceil(2.0 * opt.dt * slip_rate)));
   stats.obstacles_touched = n_touched;

@@ -32,7 +32,7 @@ namespace ernest::dynamics::detail {
 /// contact's rows renumber the rows after them: 85 of the 123 plans made in 850 steps of
 /// benchmarks/profile_rocks on 20 rocks), so more plans save few analyses, and evicting the least
 /// recently used keeps grown plans longer, which factorise more slowly than the analyses they
-/// save: the oldest plan makes room (benchmarks/RESULTS.md, "Session 10: plan memory"). Which
+/// save: the oldest plan makes room (benchmarks/RESULTS.md, "Measured and not kept"). Which
 /// bounded rows were solved inside their bounds is remembered per set of bounded rows and is the
 /// next guess. Both depend on the history: save() and load() carry them through Snapshot, and
 /// clear() starts a run afresh (reset), so that repeats stay bit-exact.

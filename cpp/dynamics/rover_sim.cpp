@@ -104,7 +104,7 @@ void SimOptions::validate() const {
 void Commands::validate() const {
   // Physical ranges, far beyond any motor of the rover but small enough that ODE's constraint
   // solve stays finite: a velocity target of 1e306 rad/s passed finite checks and made ODE abort
-  // the process (issue 18).
+  // the process.
   const char* o = "Commands";
   for (int i = 0; i < 4; ++i) {
     const std::string k = "[" + std::to_string(i) + "]";
@@ -176,7 +176,7 @@ void RoverSim::Impl::build() {
   contacts = dJointGroupCreate(0);
 
   lcp.exact_friction = opt.ground == GroundType::Rigid;  // Coulomb's cap for sliding tyres
-  // On soil the rocks' sliding contacts: Coulomb's cap in the sparse path (issue 17).
+  // On soil the rocks' sliding contacts: Coulomb's cap in the sparse path.
   lcp.coulomb_friction = opt.ground == GroundType::Soil && opt.guess_obstacle_contacts;
   set_step_length(opt.dt);
 

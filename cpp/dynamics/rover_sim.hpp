@@ -41,10 +41,10 @@ enum class WheelObstacleContact : int {
 };
 
 struct SimOptions {
-  /// Physics step [s]. Default from the step-independence study in benchmarks/RESULTS.md ("step
-  /// independence", issue 13): every evaluation course with the passive bogie and the crawling
+  /// Physics step [s]. Default from the step-independence study in benchmarks/RESULTS.md ("Step
+  /// size and step independence"): every evaluation course with the passive bogie and the crawling
   /// gait within 2 pp of travel reduction and 5 % of cost of transport of a 4x smaller step. At
-  /// 0.025 s (the earlier default, which passes straight driving) the soil's pressure-sinkage
+  /// 0.025 s (which passes straight driving) the soil's pressure-sinkage
   /// spring against its damper (time constant soil_normal_damping / (dF_z/dz) ~ 50 ms) is
   /// under-resolved: the crawling gait's first wheel lift on the 20 deg slope fails and the
   /// rocking on the mixed course's ripple moves by 5 %. Divides the 0.5 s policy period.
@@ -87,8 +87,8 @@ struct SimOptions {
   /// Guess each wheel's obstacle contacts sticking (friction rows unbounded, checked against
   /// mu F_n after the step, as rigid ground: cpp/dynamics/rover_rigid.cpp), so that a step on
   /// rocks is one linear system for the sparse solver; a wrong guess is retried with the
-  /// friction bounded by mu times the normal force (ODE's pivoting). false: always bounded, as
-  /// before issue 17 (comparisons). Needs guess_active_set.
+  /// friction bounded by mu times the normal force (ODE's pivoting). false: always bounded and
+  /// pivoted by ODE (comparisons). Needs guess_active_set.
   bool guess_obstacle_contacts = true;
   /// Solve the step's constraint system with a sparse LDLᵀ (minimum-degree order,
   /// cpp/dynamics/sparse_ldlt.hpp) when every row is unbounded or has a zero bound (the contacts'
@@ -100,32 +100,32 @@ struct SimOptions {
   /// slip ratios, until every wheel's slip agrees with eq 12 at the end of the step to 2e-3, or
   /// the soil's row bounds and explicit forces at that end slip are within this of those the
   /// step used (axle torques as forces at the wheel radius); at most 12 solves. Step
-  /// independence at 0.1 N and its cost: benchmarks/RESULTS.md, "step independence". 1e9 takes
+  /// independence at 0.1 N and its cost: benchmarks/RESULTS.md, "Step size and step independence". 1e9 takes
   /// the slip from the start of the step (explicit: a stalled wheel chatters at the step rate).
   double slip_force_tolerance = 0.1;
   /// Implicit slip's first guess: each wheel's soil-row levels predicted from its last three
   /// steps and its slip from the last step's offset over eq 12 (state: in the Snapshot), so that
   /// most steps are accepted after one solve; false: the last levels and eq 12 at the step's
-  /// start (before session 10). Either is accepted to slip_force_tolerance, so the two agree to
-  /// it (benchmarks/RESULTS.md, "Session 10: slip warm start").
+  /// start. Either is accepted to slip_force_tolerance, so the two agree to it
+  /// (benchmarks/RESULTS.md, "Where a step goes").
   bool slip_warm_start = true;
   /// A step in which a wheel touches an obstacle (a box or rock) is taken as this many substeps
   /// of dt / n. The §3.4 contact (20 kN/m, 20 N s/m on a 3 kg wheel assembly: 82 rad/s, damping
   /// ratio 0.04) is integrated with its spring explicit and its damper implicit where the
   /// contact's effective mass allows (cpp/dynamics/obstacle_contacts.hpp: no numerical damping),
   /// by ODE's implicit ERP/CFM elsewhere. The passive bogie spinning its wheels against a box
-  /// face (the Bickler trap, the wheel-high step) climbs and falls back at fine steps; it settled
-  /// at coarse ones because the implicit slip held the wheel at the stall, which the slip taken
-  /// explicitly where it drives the motion now avoids (rover_step.cpp). With 1 (the default since
-  /// session 9; 8 before) an obstacle step after one where a wheel's slip grew at a rate lambda
+  /// face (the Bickler trap, the wheel-high step) climbs and falls back at fine steps; at coarse
+  /// ones the implicit slip would hold the wheel at the stall, which the slip taken explicitly
+  /// where it drives the motion avoids (rover_step.cpp). With 1 (the default) an
+  /// obstacle step after one where a wheel's slip grew at a rate lambda
   /// with dt lambda >= 1/2 is split into ceil(2 dt lambda) <= 8 substeps (RoverSim::Impl::step):
   /// every obstacle row of bench_step_ladder.py is then within 3.1 % of dt / 16 at dt, dt/2, dt/4
-  /// and dt/8 (benchmarks/RESULTS.md, "One substep at every step size"). n > 1 substeps every
-  /// obstacle step (the pre-session-9 behaviour with 8; comparisons).
+  /// and dt/8 (benchmarks/RESULTS.md, "Step size and step independence"). n > 1 substeps every
+  /// obstacle step (for comparisons).
   int obstacle_substeps = 1;
   /// Who steps the bodies: our own island step that reproduces ODE's dWorldStep for the rover's
   /// bodies and joints (cpp/dynamics/island_step.hpp; ~10 % faster a step, the same step to
-  /// ~1e-15 m from the same state: benchmarks/RESULTS.md "Session 11: our own island step"), or
+  /// ~1e-15 m from the same state: benchmarks/RESULTS.md, "Where a step goes"), or
   /// dWorldStep itself. Own falls back to dWorldStep for any attempt it does not reproduce (a
   /// joint option it does not know, a solve the sparse path refuses), so the two differ by
   /// rounding only.
@@ -139,7 +139,7 @@ struct SimOptions {
   /// among 100) but it is not the default: where a rock's edge meets a rim it pushes the wheel
   /// sideways, and where the 20-rock drive's last stall ends moves with the step (median over 10
   /// start offsets 1.38 m at dt, 1.52 m at dt/8), where Ode's two outcomes do not
-  /// (benchmarks/RESULTS.md, "Session 12: wheel-rock contact").
+  /// (benchmarks/RESULTS.md, "Measured and not kept").
   WheelObstacleContact wheel_obstacle_contact = WheelObstacleContact::Ode;
   /// With the Own stepper: a re-solve of a step whose rows are the last attempt's (the implicit
   /// slip's solves that only move the soil rows' levels, rover_step.cpp: only the normal rows'

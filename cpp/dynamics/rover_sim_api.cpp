@@ -53,7 +53,7 @@ const Commands& RoverSim::commands() const { return impl_->cmd; }
 
 void RoverSim::set_command_vector(const double* c) {
   const ExclusiveUse busy(impl_->in_use, "RoverSim.set_command_vector");
-  // the flags are 0 or 1: a NaN compares != 0 and would read as true (issue 18)
+  // the flags are 0 or 1: a NaN compares != 0 and would read as true
   // messages built only on failure: this runs every step of a batch
   if (!(c[6] == 0.0 || c[6] == 1.0))
     throw std::invalid_argument("RoverSim commands: gimbal_enabled (column 6) = " +

@@ -11,7 +11,7 @@ namespace ernest::dynamics {
 using namespace detail;
 
 // First guesses of the implicit slip's fixed point (step_once()), so that most steps are accepted
-// after one solve (benchmarks/RESULTS.md, "Session 10: slip warm start"). Most of the extra solves
+// after one solve (benchmarks/RESULTS.md, "Where a step goes"). Most of the extra solves
 // on obstacles were not for the slip but for the soil rows' levels (shear_x, compaction) the
 // explicit terms are evaluated at: the slip agreed with eq 12 to 1e-4 while a level moved by a
 // few tenths of a newton from its last step's value, or flipped sign every step where a stalled

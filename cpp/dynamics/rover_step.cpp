@@ -331,8 +331,8 @@ void RoverSim::Impl::step_once() {
   // with it the traction, grow with the forward speed: a negative damper, an unstable rate lambda
   // of a few hundred 1/s. Backward Euler's amplification 1 / (1 - h lambda) is below 1 in magnitude
   // for h lambda > 2 (negative for h lambda > 1), so at the default step it held the wheel at
-  // that stall, where fine steps climb the face and fall back (benchmarks/RESULTS.md, "Implicit
-  // slip only where it damps"). The secant d s_end / d sigma of a wheel's last two solves
+  // that stall, where fine steps climb the face and fall back (benchmarks/RESULTS.md, "Step
+  // size and step independence"). The secant d s_end / d sigma of a wheel's last two solves
   // estimates h lambda; a wheel where it reaches 1 (the step's equation in sigma can then have
   // several roots, and backward Euler reverses or damps the growth) takes its slip from
   // the start of the step (forward Euler: amplification 1 + h lambda, a growing motion grows)

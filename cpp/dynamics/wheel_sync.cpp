@@ -43,7 +43,7 @@ using SyncCod = Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<double, 12,
 
 // cod.solve(rhs) without its heap temporary: Eigen 3.4's applyZAdjointOnTheLeftInPlace allocates
 // a dynamic vector whenever A is rank-deficient (it is here), and the onboard loop calls this at
-// 50 Hz (issue 17 item 6). The same operations in the same order as Eigen's _solve_impl, so the
+// 50 Hz, where it must not allocate. The same operations in the same order as Eigen's _solve_impl, so the
 // result is bit-identical (checked against cod.solve in tests/cpp/test_dynamics.cpp).
 Eigen::Matrix<double, 11, 1> cod_solve(const SyncCod& cod, const Eigen::Matrix<double, 12, 1>& rhs) {
   Eigen::Matrix<double, 11, 1> dst;

@@ -1,9 +1,8 @@
-// The planner's digital elevation map from the perception stack (issue 16: "the planner's DEM
-// comes from the perception stack (stereo -> fused map) or, as an option, the simulator's ground
-// truth"). The fused stereo map (perception::ElevationMap, 1 cm cells, NaN = never seen, a
-// variance per cell) becomes a dynamics::HeightMap at the planner's spacing that is, wherever the
-// map says anything, an upper envelope of what was seen, and that never turns an unseen cell into
-// free ground. The policy, and why:
+// The planner's digital elevation map from the perception stack (stereo -> fused map; the
+// simulator's ground truth is the other option). The fused stereo map (perception::ElevationMap,
+// 1 cm cells, NaN = never seen, a variance per cell) becomes a dynamics::HeightMap at the
+// planner's spacing that is, wherever the map says anything, an upper envelope of what was
+// seen, and that never turns an unseen cell into free ground. The policy, and why:
 //  1. Each observed cell is raised by k sigma (its standard deviation): the planner's clearances
 //     then hold against the stereo noise (k = 2: one-sided 97.7 %). A cell whose sigma exceeds
 //     max_sigma tells nothing useful and counts as unseen. Raising the ground also raises foot

@@ -50,7 +50,7 @@ const char* to_string(PolicyError::Kind kind);
 struct PolicyExpectations {
   std::string layout_version = "ernest-obs-v" + std::to_string(sensing::kObservationLayoutVersion);
   /// Older versions with the same order and size, accepted when their obs_scale is `scales`
-  /// (version 1 files were written with two different tables under one name; issue 18).
+  /// (version 1 files exist with two different tables under one name).
   std::vector<std::string> legacy_layout_versions = {"ernest-obs-v1"};
   sensing::ObservationScales scales{};
   sensing::ActionLimits limits{};

@@ -14,7 +14,7 @@ namespace ernest::sensing {
 
 /// Bumped whenever the order, size or scaling convention of the observation changes; exported
 /// policies record it and the runtime refuses a mismatch. 2: ObservationScales is the only scale
-/// table (bound to Python, which had a second one under version 1: issue 18). The order, size and
+/// table (bound to Python; version 1 files may carry a second one). The order, size and
 /// this table are those of version 1; a version 1 file is read when its obs_scale is this table.
 inline constexpr int kObservationLayoutVersion = 2;
 inline constexpr int kObservationSize = 45;  // 1 + 1 + 2 + 2 + 24 + 12 + 3 (§4.2)

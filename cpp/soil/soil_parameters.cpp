@@ -58,7 +58,7 @@ SoilParameters SoilParameters::wet_sand() {
   // softer pressure–sinkage response, so a wheel sinks deeper than on M90 at the same load.
   // Orders of magnitude follow Wong's tables for sandy loams with high moisture content (his
   // Michigan sandy loam at 11 % moisture has c = 4.83 kPa). Checked on the 20 deg slope
-  // course (benchmarks/RESULTS.md, "wet sand"): the passive bogie is immobilised (Table 6's
+  // course (docs/soil.md): the passive bogie is immobilised (Table 6's
   // finding) while a crawling gait climbs; the literature sets tried there (Wong's LLL dry
   // sand, LLL sandy loam at 15 %, Michigan sandy loam at 11 % and 23 % moisture) immobilise the
   // crawling gait too, against the paper's "increased cohesion enhances the crawling gait".
