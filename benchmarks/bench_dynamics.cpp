@@ -1,4 +1,4 @@
-// Dynamics benchmark (issue 3): physics step-size study, steps/s and real-time factor of one rover
+// Dynamics benchmark: physics step-size study, steps/s and real-time factor of one rover
 // on flat M90 and on a field of 20 rocks, and batch scaling 1 -> 2 threads. Medians of repeats.
 //   ./run bench dynamics      (then bench_dynamics.py: MuJoCo side by side)
 #include <algorithm>
@@ -49,7 +49,7 @@ std::shared_ptr<RoverSim> driving(const std::vector<BoxObstacle>& obs, double dt
   return sim;
 }
 
-// Issue 3 criterion: settle on M90 and drive at 0.2 m/s; sinkage and distance after 10 s within 1%
+// Step-size criterion: settle on M90 and drive at 0.2 m/s; sinkage and distance after 10 s within 1%
 // of a run at a 4x smaller step. ERNEST cannot start from rest on M90 under eq 12 (slip is
 // regularised to ~0 below ~0.04 m/s), so the run starts rolling at 0.2 m/s with the wheels at
 // 0.2 / r; the first 2 s settle, then sinkage is read and the distance measured over 10 s.

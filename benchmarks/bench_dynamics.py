@@ -1,28 +1,27 @@
-"""Dynamics from Python, like for like with MuJoCo (issues 3 and 17): the same rover — same bodies,
+"""Dynamics from Python, like for like with MuJoCo: the same rover — same bodies,
 joints, masses, inertias, step — driving 0.15 m/s on flat ground and through fields of 20 and 100
 box rocks, in our ODE simulator on M90 soil (Bekker–Wong) and in MuJoCo on rigid ground with the
 same boxes. MuJoCo's wheels meet the ground as spheres of the wheel radius: one contact per wheel
 on flat ground, as ours (a cylinder touches MuJoCo's plane at two points: 8 contacts against our
 4). Against the rocks MuJoCo is timed twice:
-- "our wheel shape" (the like-for-like figure, since session 12): the wheel meets the rocks as
+- "our wheel shape" (the like-for-like figure): the wheel meets the rocks as
   ours does, as a cylinder of the wheel's radius and width, with one contact per wheel-rock pair
   as ours (MuJoCo's multi-point convex collision, multiccd, off; our collider's points are merged
   into one contact per pair). The sphere is kept for the ground only and the cylinder for the
-  rocks only (contype / conaffinity), so flat ground is the same model as before;
-- "sphere wheels" (sessions 9-11): the sphere meets the rocks too, a different and much cheaper
+  rocks only (contype / conaffinity), so on flat ground both MuJoCo models are the same;
+- "sphere wheels": the sphere meets the rocks too, a different and much cheaper
   collision (sphere-box) than ours (cylinder-box), and a sphere touches a rock where a wheel of
   width 0.13 m does not.
 Prints microseconds per step (medians of interleaved repeats, stepping loops in C in both) and our
 time over MuJoCo's per scenario. MuJoCo's chassis box does not collide (ours can: it never
 touches these rocks).
 
-Our default (SimOptions.obstacle_substeps = 1 since session 9) takes a step touching a rock as
-one step, split into up to 8 substeps only after a step in which a wheel's slip grew fast (a
-wheel surging up a rock face: obstacle_contacts.cpp); before session 9 every such step was 8
-substeps. The rock scenarios are timed with the default (what training runs) and with the old
-8 substeps, for comparison. Since session 11 the default steps the bodies with our own island
-step (SimOptions.stepper = Own); every scenario is also timed with ODE's dWorldStep (Ode). Since
-session 12 the rock scenarios are also timed with the exact wheel–rock contact
+Our default (SimOptions.obstacle_substeps = 1) takes a step touching a rock as one step, split
+into up to 8 substeps only after a step in which a wheel's slip grew fast (a wheel surging up a
+rock face: obstacle_contacts.cpp). The rock scenarios are timed with the default (what training
+runs) and with 8 substeps on every rock step, for comparison. The default steps the bodies with
+our own island step (SimOptions.stepper = Own); every scenario is also timed with ODE's
+dWorldStep (Ode). The rock scenarios are also timed with the exact wheel–rock contact
 (SimOptions.wheel_obstacle_contact = Exact, cpp/dynamics/cylinder_box.hpp; not the default).
 
     pip install mujoco          (benchmark-only extra: pip install '.[bench]')

@@ -1,8 +1,8 @@
 """Environment throughput: policy steps per second (each 0.5 s of simulation) for one Gymnasium
 env and for the C++ vector env on 1 and 2 threads, on the rock field and the slope. Random
 actions, medians over repeats. Reference in the same run: the single env (Python step loop).
-Target (issue 5): >= 1000 policy steps per second on 2 cores. Then the batched stepper alone
-(issue 17): rover-steps per second on rocks for 1 and 2 threads, against one process per core.
+Target: >= 1000 policy steps per second on 2 cores. Then the batched stepper alone:
+rover-steps per second on rocks for 1 and 2 threads, against one process per core.
 
     ./run bench envs
 """
@@ -115,7 +115,7 @@ def process_rate(n: int, chunk: int, steps: int, repeats: int) -> float:
 
 
 def batch_scaling(n: int = 8, steps: int = 400, repeats: int = 5):
-    """The batched stepper from 1 to 2 threads on rocks (issue 17), and the reference measured in
+    """The batched stepper from 1 to 2 threads on rocks, and the reference measured in
     the same run: the same rovers as one process per core (each half of them on one thread)."""
     print(f"\nBatchStepper, {n} rovers on M90 + 20 rocks (RockField-like), {steps} physics steps "
           f"each, medians of {repeats}; load average {os.getloadavg()[0]:.1f}")
@@ -134,9 +134,9 @@ def schedule_bound(n: int = 8, chunk: int = 4, calls: int = 100):
     """What the thread schedule alone allows, whatever the machine's load: each rover's CPU time
     per call (thread CPU time: preemption by other processes does not count) measured on its own,
     one after the other, then per call the 2-thread makespan of a fixed
-    share (rover i on thread i % 2, the old BatchStepper), of handing rovers out in index order to
+    share (rover i on thread i % 2), of handing rovers out in index order to
     whichever thread is free (ThreadPool), and of handing them out costliest first by the last
-    call's constraint solves (BatchStepper now); speed-up bound = total work / makespan summed
+    call's constraint solves (what BatchStepper does); speed-up bound = total work / makespan summed
     over calls."""
     sims, _ = _rovers(n)
     total = fixed = greedy = longest = 0.0

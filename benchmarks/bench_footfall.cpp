@@ -1,4 +1,4 @@
-// FootFall benchmark (issue 16): on the SDM-B standard stance among rocks (footfall::rock_field),
+// FootFall benchmark: on the SDM-B standard stance among rocks (footfall::rock_field),
 //  * the stability map of leg 0 with 2 cm cells over its full reach (target ≤ 0.5 s),
 //  * SBL (OMPL) on random feasible queries between compliance waypoints above random stable cells
 //    (target ≤ 50 ms median), success rate, and OMPL's RRT-Connect on the same queries as the

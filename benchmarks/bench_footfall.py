@@ -1,4 +1,4 @@
-"""FootFall from Python (issue 16): the stability map of one SDM-B leg (2 cm cells, full reach)
+"""FootFall from Python: the stability map of one SDM-B leg (2 cm cells, full reach)
 through the binding and its numpy view, and a sag-compensated step (map + sag + SBL + smoothing),
 medians of repeats; the C++ figures (SBL vs RRT-Connect, smoother vs OMPL's simplifier) are
 benchmarks/bench_footfall.cpp, which `./run bench footfall` runs first. Then the terrain from

@@ -105,7 +105,7 @@ class BatchedTwinCritic(StackedTwinCritic):
 
 
 class BaselineTD3:
-    """``rl.td3.TD3.update`` as it was before fusing (the defaults); each flag switches on one of
+    """``rl.td3.TD3.update`` without the fused optimisations (torch's defaults); each flag switches on one of
     the optimisations, so that their effect is measured one at a time."""
 
     def __init__(self, cfg: TD3Config, seed: int = 0, fused_critic=False, fused_adam=False,

@@ -1,4 +1,4 @@
-// Perception benchmark (issue 15): one 640x480 stereo pair of the rock-field scenario at the start
+// Perception benchmark: one 640x480 stereo pair of the rock-field scenario at the start
 // pose: ray casting one camera, StereoBM on the pair (OpenCV on one thread, and with its default
 // threads), back-projection, and fusing the frame's cloud into the 10 m x 10 m, 1 cm map (target
 // <= 10 ms on one core). Medians of repeats. The Python half (bench_perception.py) measures the

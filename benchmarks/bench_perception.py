@@ -1,4 +1,4 @@
-"""Perception benchmark, Python half (issue 15), each against a reference in the same run (medians):
+"""Perception benchmark, Python half, each against a reference in the same run (medians):
 
 1. StereoBM on one 640x480 pair of the rock field: ours (Debian OpenCV through the C++ core) vs the
    same call through cv2 (opencv-python-headless), both on one thread.

@@ -1,4 +1,4 @@
-"""Ray backend throughput (issue 19): environment steps per second collected on the rock field by
+"""Ray backend throughput: environment steps per second collected on the rock field by
 the local trainer (its vector env on one thread, one core) and by ``--backend ray`` with 1 and 2
 rollout workers, and the Ray path's overhead per transition. Reference in the same run: the local
 trainer. Policy actions with the §4.4 exploration (random_steps 0), no learning (the collection

@@ -1,12 +1,12 @@
-"""Rock contacts (issue 17, item 2): microseconds per step against the number of rocks the rover
+"""Rock contacts: microseconds per step against the number of rocks the rover
 is touching at the start of the step (SolverStats.obstacles_touched), not merely present. One
 rover drives 0.15 m/s on M90 through two fields: low flat rocks that the wheels roll onto
 (their contacts stick: the guessed path) and 100 box rocks that stop the rover (a wheel spinning
 against a rock face slides: ODE's bounded contact); every step is timed on its own and binned by
-the rocks in contact. Timed with the default obstacle_substeps (1 since session 9: a step in
-contact split only where a wheel's slip grows fast) and with 8 (before session 9; the defaults of --substeps). Reference in the same run: the same rover with the rock
+the rocks in contact. Timed with the default obstacle_substeps (1: a step in
+contact split only where a wheel's slip grows fast) and with 8 (the defaults of --substeps). Reference in the same run: the same rover with the rock
 contacts always solved with their friction bounds (SimOptions.guess_obstacle_contacts = False,
-ODE's pivoting solver, as before issue 17), on the same rocks; and the cost of an empty call
+ODE's pivoting solver), on the same rocks; and the cost of an empty call
 from Python (step_n(0)), which every timed step includes.
 
     python benchmarks/bench_rocks.py [--steps 2400] [--contact exact]
@@ -83,7 +83,7 @@ def main():
     print(f"load average {os.getloadavg()[0]:.1f}; M90, {args.steps} steps of {D.SimOptions().dt} s "
           f"at {SPEED} m/s; an empty call from Python costs {empty:.2f} us (included below)")
     print("| field | substeps | rocks in contact | steps | guessed (us/step, median) | "
-          "bounded, as before (us/step) | ratio |")
+          "always bounded (us/step) | ratio |")
     print("|---|---|---|---|---|---|---|")
     notes = []
     for name, rocks in fields.items():

@@ -1,4 +1,4 @@
-// Onboard runtime benchmark (issue 7, SPEC "policy inference in the C++ runtime <= 50 us").
+// Onboard runtime benchmark (target: "policy inference in the C++ runtime <= 50 us").
 //   ./run bench runtime            or   bench_runtime [--policy FILE] [--repeats N]
 // 1. Inference latency of runtime::Policy::command (the paper-size actor 45-512-512-3 of §4.1
 //    wrapped like rl/export.py's ExportedPolicy: normalisation, tanh, action ranges), one thread,

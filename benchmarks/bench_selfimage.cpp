@@ -1,4 +1,4 @@
-// Self-imaging benchmark (issue 16, seed 003 §5.2): the watershed removal of the raised leg on
+// Self-imaging benchmark (seed 003 §5.2): the watershed removal of the raised leg on
 // the walker hazcam's 640 x 480 depth map, against the stereo matching that produces such a depth
 // map (OpenCV StereoBM with the left-right check, our default, on the same camera's rendered pair)
 // as the reference; both on one OpenCV thread, medians over the scene's five leg poses x repeats.

@@ -1,4 +1,4 @@
-"""Self-imaging benchmark, Python half (issue 16, seed 003 §5.2): per leg pose of the walker
+"""Self-imaging benchmark, Python half (seed 003 §5.2): per leg pose of the walker
 scene, the watershed segmentation of the 640 x 480 hazcam depth map through the bindings against
 the stereo matching of the same camera's pair (StereoBM with the left-right check, our default) as
 the reference, medians, one OpenCV thread; and a figure of both time distributions with the IoU.

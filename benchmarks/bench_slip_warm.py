@@ -1,7 +1,6 @@
-"""Implicit slip's warm start (issue 17 item 1, session 10): how many solves a step takes for its
+"""Implicit slip's warm start: how many solves a step takes for its
 slip (1 + the step's SolverStats.slip_solves), step by step, with SimOptions.slip_warm_start on
-(the default) and off (eq 12 at the step's start and the last step's soil-row levels, as before
-session 10), on bench_dynamics.py's driving runs: the rover rolling at 0.15 m/s on flat M90, into
+(the default) and off (eq 12 at the step's start and the last step's soil-row levels), on bench_dynamics.py's driving runs: the rover rolling at 0.15 m/s on flat M90, into
 rock_field(20) (it stalls against a rock) and into rock_field(100). Prints, per scenario, the
 share of steps (and of steps touching a rock) accepted after one solve, the mean solves per step,
 and the median microseconds per step with the ratio warm / cold measured in the same run

@@ -1,6 +1,6 @@
-"""The stalled rover of issue 13: the passive bogie driving its wheels at 0.2 m/s up a 20 deg M90
+"""A stalled rover: the passive bogie driving its wheels at 0.2 m/s up a 20 deg M90
 slope (the environments' eq 12/16 constants, rolling start), 10 s, with the slip of eq 12 solved
-implicitly (default) and explicitly (``slip_force_tolerance = 1e9``, the old behaviour), at dt,
+implicitly (default) and explicitly (``slip_force_tolerance = 1e9``), at dt,
 dt/2 and dt/4. Prints the mean creep over the last 5 s, the wheel-load standard deviation after the
 first second and the extra solves per step.
 

@@ -6,7 +6,7 @@
 //   * one sag solve (ATHLETE-like hexapod, random CG, one foot lifted in a third of them); its
 //     same-run reference is in bench_statics.py (the same residuals, eqs 4–8, in numpy, solved by
 //     scipy.optimize.least_squares(method="lm"), i.e. MINPACK), which ./run bench runs next.
-// Medians over repeats, since these machines are noisy. Targets (issue 14): 2 us, 5 us, 1 ms.
+// Medians over repeats, since these machines are noisy. Targets: 2 us, 5 us, 1 ms.
 #include <algorithm>
 #include <boost/geometry.hpp>
 #include <boost/geometry/geometries/point_xy.hpp>

@@ -1,4 +1,4 @@
-"""Step independence of the evaluation results (issue 13, item 1): every evaluation course of
+"""Step independence of the evaluation results: every evaluation course of
 ``ernest evaluate`` (seed 004 §5, Table 6) with every controller (passive bogie, crawling gait,
 the committed learned policy), run at the default physics step and at a quarter of it. Prints
 travel reduction and cost of transport at both steps, their differences, and whether they are

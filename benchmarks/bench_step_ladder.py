@@ -1,4 +1,4 @@
-"""Step ladder of the obstacle courses (issue 17, session 9): cost of transport and travel
+"""Step ladder of the obstacle courses: cost of transport and travel
 reduction of ``ernest evaluate``'s Bickler trap, wheel-high step and mixed course (passive bogie
 and crawling gait, seed 0) at dt, dt/2, dt/4, dt/8 and dt/16 with one obstacle substep, and at
 dt, dt/2 and dt/4 with the default substeps. Comparing dt with dt/4 alone can miss a step size in

@@ -1,4 +1,4 @@
-// Walker benchmark (issue 14: "IK of one leg ≤ 20 µs"): microseconds per single-start IK solve of
+// Walker benchmark (target: IK of one leg ≤ 20 µs): microseconds per single-start IK solve of
 // an SDM-B leg (LegIk::solve_from) for targets around the standard stance, seeded from the
 // standard configuration; also the multi-start solve (every solution), forward kinematics with
 // the contact Jacobian, and the static torques. Medians over repeats. The same-run reference (the

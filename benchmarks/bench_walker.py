@@ -1,4 +1,4 @@
-"""Walker IK from Python (issue 14: IK of one leg <= 20 us): the C++ single-start solve
+"""Walker IK from Python (target: IK of one leg <= 20 us): the C++ single-start solve
 (LegIk.solve_from, binding overhead included) against the same solve in numpy + scipy in the same
 run: the same residual (wheel centre and w * (R - R*), 12 rows), the same analytic Jacobian, the
 same q = c + h sin(u) limit transform, the same MINPACK Levenberg-Marquardt (scipy's

@@ -1,4 +1,4 @@
-// Walker in ODE (issue 16, execution in simulation): wall time to simulate one gait cycle of
+// Walker in ODE (execution in simulation): wall time to simulate one gait cycle of
 // FootFall's skeleton gait (cpp/walker/gait_planner: six steps through the compliance waypoints and
 // six body shifts, SDM-B, flat ground) against the simulated time (the reference: real time).
 // Medians over repeats, each from a fresh simulator settled on its six wheels (not timed). The

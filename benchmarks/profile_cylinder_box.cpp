@@ -1,5 +1,4 @@
-// A wheel against a rock (issue 17 item 1, "Session 10: collision" and "Session 12: wheel-rock
-// contact" in RESULTS.md): ODE's dCollideCylinderBox merged into one contact (what near() in
+// A wheel against a rock (benchmarks/RESULTS.md, "Measured and not kept"): ODE's dCollideCylinderBox merged into one contact (what near() in
 // cpp/dynamics/obstacle_contacts.cpp does with SimOptions::wheel_obstacle_contact = Ode), the
 // exact contact (cylinder_box.hpp, Exact), and FCL's cylinder-box (libccd's GJK/EPA and FCL's own
 // GJK solver) on the same 1000 touching poses: a wheel-sized cylinder (axle within 6 deg of

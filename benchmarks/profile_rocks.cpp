@@ -1,4 +1,4 @@
-// Driver for instruction-count profiles of the rock scenarios (issue 17): one rover rolling at
+// Driver for instruction-count profiles of the rock scenarios: one rover rolling at
 // 0.15 m/s on M90 (friction 0.8 on the rocks) into box rocks read from a file, as
 // bench_dynamics.py's rolling_rover; the 50 steps of run-up are not counted (callgrind's
 // collection is switched on after them when run with --collect-atstart=no and
