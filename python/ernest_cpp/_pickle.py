@@ -5,7 +5,7 @@ Every ``*Options``, ``*Parameters``, ``*Scales``, ``*Weights`` and ``*Limits`` c
 read/write properties, so a copy is rebuilt by default-constructing it and setting each field
 (nested structs recurse through the same reducer). Registered with :mod:`copyreg` on import of
 the package. This is what makes the environments (``EnvOptions``, ``RoverParameters``) picklable
-for multiprocessing and deep-copyable (issue 18); no C++ change or pickle format to maintain.
+for multiprocessing and deep-copyable; no C++ change or pickle format to maintain.
 """
 
 from __future__ import annotations

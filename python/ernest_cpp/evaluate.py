@@ -37,7 +37,7 @@ def controllers(policy_file: str | None):
     out = {PASSIVE: (PassiveController(), True),
            CRAWLING: (CrawlingGaitController(), False)}
     if policy_file:
-        from .rl.export import load_policy  # TorchScript actor with its scaling (issue 6)
+        from .rl.export import load_policy  # TorchScript actor with its scaling
 
         import torch
 

@@ -1,7 +1,6 @@
-"""FootFall's terrain from the perception stack (issue 16: "the planner's digital elevation map
-comes from the perception stack (stereo → fused map) or, as an option, the simulator's ground
-truth"). A stereo pair on a mast above the walker's body looks round in ``views`` directions (a
-pan), each frame is rendered from the ground-truth scene, matched (StereoBM) and fused into the
+"""FootFall's terrain from the perception stack: the planner's digital elevation map from stereo
+(stereo → fused map) or, as an option, the simulator's ground truth. A stereo pair on a mast
+above the walker's body looks round in ``views`` directions (a pan), each frame is rendered from the ground-truth scene, matched (StereoBM) and fused into the
 perception stack's elevation map (``perception.StereoMapper``); ``footfall.terrain_from_map``
 then makes the planner's DEM: heights raised by k sigma, small holes filled from above, unseen
 areas (under the body, behind rocks) obstacle columns the leg can neither cross nor stand on

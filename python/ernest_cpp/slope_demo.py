@@ -70,7 +70,7 @@ def run(controller: str, soil: str = "m90", duration: float = 60.0, vx: float = 
     params.eps_slip = _envs.EnvOptions().eps_slip if eps_slip is None else float(eps_slip)
     sim = D.make_sim("soil", terrain=_terrain(slope_deg), soil=params)
     # Rolling start at the commanded speed: under eq 12's slip regularisation a wheel cannot build
-    # slip from rest (see benchmarks/RESULTS.md, dynamics).
+    # slip from rest (see benchmarks/RESULTS.md, "Model findings").
     sim.reset(0.0, 0.0, 0.0, 0.0, 0.0, vx)
     dt = sim.options.dt
     n = int(round(duration / dt))
