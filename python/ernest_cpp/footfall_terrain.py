@@ -1,10 +1,11 @@
 """FootFall's terrain from the perception stack: the planner's digital elevation map from stereo
-(stereo → fused map) or, as an option, the simulator's ground truth. A stereo pair on a mast
-above the walker's body looks round in ``views`` directions (a pan), each frame is rendered from the ground-truth scene, matched (StereoBM) and fused into the
-perception stack's elevation map (``perception.StereoMapper``); ``footfall.terrain_from_map``
-then makes the planner's DEM: heights raised by k sigma, small holes filled from above, unseen
-areas (under the body, behind rocks) obstacle columns the leg can neither cross nor stand on
-(the policy and its reasons: ``cpp/footfall/terrain_map.hpp``).
+(stereo → fused map) or, as an option, the simulator's ground truth. A stereo pair on a mast above
+the walker's body looks round in ``views`` directions (a pan), each frame is rendered from the
+ground-truth scene, matched (StereoBM) and fused into the perception stack's elevation map
+(``perception.StereoMapper``); ``footfall.terrain_from_map`` then makes the planner's DEM: heights
+raised by k sigma, small holes filled from above, unseen areas (under the body, behind rocks)
+obstacle columns the leg can neither cross nor stand on (the policy and its reasons:
+``cpp/footfall/terrain_map.hpp``).
 
 The mast is ours (the paper's walker maps with its own cameras; the rover masthead of seed 004
 looks 30° down from 1.30 m, too shallow to see the ground next to a 1.75 m-high body)."""
