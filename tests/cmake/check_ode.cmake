@@ -1,4 +1,4 @@
-# Configure-time ODE checks (cmake/ErnestOde.cmake; issue 17 item 4), a ctest script:
+# Configure-time ODE checks (cmake/ErnestOde.cmake), a ctest script:
 #   cmake -DMODULE=<ErnestOde.cmake> -DPROJECT_DIR=<tests/cmake/ode_project> -DWORK_DIR=<dir>
 #         -DLIBDIR=<ODE's libdir> -DGENERATOR=<generator> -P check_ode.cmake
 # An ODE outside the supported versions and a static libode must stop the configuration with a

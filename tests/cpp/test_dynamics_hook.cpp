@@ -1,4 +1,4 @@
-// Issue 17 item 4: the solver hook made safe. The fast path is active in this build and says so
+// The solver hook checked. The fast path is active in this build and says so
 // (fast_lcp_active, SolverStats::fast_lcp); ODE's process-wide handlers that another ODE user
 // installed before ours still get every message and error that is not ours.
 #include <gtest/gtest.h>

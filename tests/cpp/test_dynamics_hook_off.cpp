@@ -1,4 +1,4 @@
-// Issue 17 item 4: the solver hook found off. This executable is linked so that it does not
+// The solver hook found off. This executable is linked so that it does not
 // export ernest's dxSolveLCP (tests/CMakeLists.txt: --exclude-libs), as with a libode that binds
 // its call internally: ODE never reaches the fast path. The probe must say so and why, warn once
 // on stderr, and every step must run on ODE's own solver.

@@ -1,4 +1,4 @@
-// Obstacle contacts guessed like rigid ground (issue 17): a wheel's contact points with a box
+// Obstacle contacts guessed like rigid ground: a wheel's contact points with a box
 // emitted sticking (friction rows unbounded, checked against mu F_n after the step) go to the
 // sparse solver; a wheel that slides falls back to ODE's contact with bounded friction.
 #include <gtest/gtest.h>

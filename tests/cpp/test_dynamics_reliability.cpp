@@ -1,4 +1,4 @@
-// Issue 18 items 1–2 in C++: commands with physical ranges, ODE's internal errors as exceptions
+// Reliability in C++: commands with physical ranges, ODE's internal errors as exceptions
 // instead of a process abort, and one RoverSim used from two threads refused, not raced.
 #include <gtest/gtest.h>
 #include <ode/ode.h>

@@ -73,7 +73,7 @@ double power_above(const std::vector<double>& x, double dt, double f_cut) {
 
 // The rover driving its wheels at 0.15 m/s on flat M90 into a rock wider than it and as high as
 // a wheel: it stalls against the face with its front wheels spinning (the 20-rock benchmark's
-// situation, benchmarks/RESULTS.md "Session 10: slip warm start").
+// situation, benchmarks/RESULTS.md "Where a step goes").
 std::unique_ptr<RoverSim> against_rock(bool warm) {
   SimOptions o;
   o.friction = 0.8;

@@ -317,7 +317,7 @@ TEST(SparseLcp, SolvesContactsThatPushOrSeparateAndHandsFrictionBoundsToOde) {
 }
 
 // More than 64 rows (two or more wheels on rocks): row sets are 128-bit masks, so such a step
-// stays on the sparse path (issue 17) and agrees with ODE's Dantzig solver; over 128 rows it
+// stays on the sparse path and agrees with ODE's Dantzig solver; over 128 rows it
 // goes to ODE. A row of boxes chained by ball joints (3 unbounded rows each), each on 4 contacts
 // (a normal row bounded below by 0 and 2 unbounded friction rows, as emit_obstacles emits a
 // sticking rock contact), pressed down and moving sideways: the contacts push and stop them.

@@ -1,11 +1,11 @@
 // Steps in contact with an obstacle taken as substeps (SimOptions::obstacle_substeps): the passive
 // bogie spinning its wheels against a wall (the Bickler trap) climbs it and falls back at fine
-// steps and settled at coarse ones: the implicit slip (backward Euler in seed 004 eq 12) held the
-// wheel at the stall, where the slip grows with the forward speed and drives the motion. With the
+// steps, and would settle at coarse ones if the implicit slip (backward Euler in seed 004 eq 12)
+// held the wheel at the stall, where the slip grows with the forward speed and drives the motion. With the
 // slip taken from the step's start where it drives (rover_step.cpp), 1 substep reproduces the
 // fine steps here; with the obstacle step split where a wheel's slip grows fast
-// (obstacle_contacts.cpp) 1 is the default since session 9 (benchmarks/RESULTS.md, "One substep
-// at every step size"), and these tests hold for it.
+// (obstacle_contacts.cpp) 1 is the default (benchmarks/RESULTS.md, "Step size and step
+// independence"), and these tests hold for it.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -61,7 +61,7 @@ TEST(ObstacleSubsteps, AStepWithSubstepsMatchesFineSteps) {
 }
 
 TEST(ObstacleSubsteps, WallStallEnergyDoesNotDependOnTheStep) {
-  // Issue 13 item 1 with the default substeps: dt and dt / 4 within 5 % of energy and 1 cm.
+  // Step independence with the default substeps: dt and dt / 4 within 5 % of energy and 1 cm.
   const int n = SimOptions{}.obstacle_substeps;
   const double dt = SimOptions{}.dt;
   const WallRun a = push_wall(dt, n, 12.0);

@@ -1,16 +1,15 @@
-// Pinned trajectories (issue 17 item 5): fixed scenarios stepped with fixed command sequences, the
-// bit patterns of every step's 65-value state vector (and the final bodies) hashed and compared
-// with hashes pinned on the code before the simulator core's refactor. A refactor of the core that
-// moves code without changing the arithmetic keeps every hash; a one-bit change anywhere in a
-// trajectory changes its hash (TrajectoryHash.OneUlpChangesTheHash shows it on the start state).
+// Pinned trajectories: fixed scenarios stepped with fixed command sequences, the bit patterns of
+// every step's 65-value state vector (and the final bodies) hashed and compared with hashes pinned
+// below. A change of the core that moves code without changing the arithmetic keeps every hash; a
+// one-bit change anywhere in a trajectory changes its hash (TrajectoryHash.OneUlpChangesTheHash
+// shows it on the start state).
 //
 // The bits depend on the compiler, its flags and the Eigen/ODE builds: the pins hold for the
 // Release build `./run test` makes (g++ -O3 of Debian 12, -fno-math-errno -fno-trapping-math) and
-// for its ASan + UBSan build (checked: the same bits). A change that is meant to change the physics
-// (or a new toolchain) re-pins: run this test, check the trajectories' physics with the other
-// dynamics tests, and copy the printed hashes into kPinnedOwn / kPinnedOde below, saying why in the commit and
-// above the pins (the last: session 13, one clamped-friction column per normal force; each
-// scenario is pinned on both steppers, Own and ODE's dWorldStep).
+// for its ASan + UBSan build (the same bits). A change that is meant to change the physics (or a
+// new toolchain) re-pins: run this test, check the trajectories' physics with the other dynamics
+// tests, and copy the printed hashes into the pins below, saying why in the commit. Each scenario
+// is pinned on both steppers (Own and ODE's dWorldStep) and both wheel-rock contacts.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -176,70 +175,30 @@ std::uint64_t snapshot_restore(Config stepper) {
   return first.h;
 }
 
-// Pinned on main f916837 (before the refactor of issue 17 item 5), Release build. snapshot_restore
-// re-pinned once since (was 0x8b5689c93708e084): on main the restored run parted from the original
-// 22 steps after the restore (restore() left the obstacle guesses' obstacle_next as the
-// simulation last had it); now it repeats it, and the other four hashes did not move.
-// All five re-pinned in session 9 (issue 17 item 1; were 0x2f365ea23563e09d, 0x50205655d4657eea,
-// 0xe6c4a08956657933, 0x3222f29e8435a6f3, 0xcfec0b62efadb0aa), for three changes made on purpose:
-// the soil normal row's dF_z/dz is eq 17 differentiated under the integral
-// (SoilSplit::dfz_pressure_dh) instead of a forward difference over 1 % of the sinkage (closer to
-// the exact derivative: test_soil SinkageDerivativeMatchesDifferencesOfTheForce), which moves all
-// five; the obstacle contacts (one contact per rover-body–obstacle pair, the §3.4 spring
-// explicit, the broad phase's order: cpp/dynamics/obstacle_contacts.hpp), which moves rock_field,
-// batch and snapshot_restore; and a wheel whose slip drives its motion taking the slip from the
-// step's start instead of the implicit one (cpp/dynamics/rover_step.cpp), which happens on flat
-// soil too (12 of flat_m90's 400 steps with its varying wheel speeds; SolverStats::slip_driving).
-// Then rock_field, batch and snapshot_restore once more (were 0xa7d5a9694fedf4d1,
-// 0xb9d2e6bc922c9e50, 0xdfee75ef2ecbc109): SimOptions::obstacle_substeps' default went from 8 to
-// 1 (an obstacle step split only where a wheel's slip grows fast: obstacle_contacts.cpp).
-// All five re-pinned in session 10 (were 0x843b60171e5dcc87, 0x75182b8741bcfcce,
-// 0x634a880c3caeb13f, 0x797cb71fa1cd1faf, 0xac23b1deb408451e) for two changes together:
-// (1) SparseLdlt factorises its supernodes and dense tail with its own kernel (sparse_ldlt_numeric.cpp
-// dense_ldlt, right-looking in blocks of 4 columns) instead of ODE's dFactorLDLT and dSolveL1,
-// whose order of operations differs: the same factor to rounding (test_dynamics_ldlt checks it
-// against Eigen's dense LDLᵀ), other last bits; (2) the implicit slip's loop starts from warm
-// guesses (SimOptions::slip_warm_start, rover_slip.cpp: the soil rows' levels predicted from the
-// last three steps, the slip from the last step's offset over eq 12). The loop accepts any slips
-// and levels within slip_force_tolerance, so a different start accepts a different point within
-// it: every soil trajectory moves at rounding-to-tolerance level (one step from the same state
-// with and without: <= 3e-4 m/s, test_dynamics_slip WarmStartSavesSolvesAndKeepsTheStep).
-// Session 11: SimOptions::stepper's default became Own (our own island step,
-// cpp/dynamics/island_step.hpp), which forms A = J M⁻¹ Jᵀ body by body where ODE sums it joint
-// pair by joint pair: the same step to rounding (test_dynamics_island_step: ~1e-15 m per step from
-// the same state), other last bits, so all five were pinned for Own (kPinnedOwn). The Ode path
-// (dWorldStep) keeps the session-10 pins (kPinnedOde), unchanged: nothing on it moved.
-// Session 12, all ten re-pinned (Own were 0x99302755834fb1ff, 0x90e13077536399fa,
-// 0xe8dce32c749cf013, 0x93dfc69f6efc7079, 0x556e38d413ba4ce1; Ode 0x6e9b20ecdb9723dd,
-// 0xd9c34ab7c133969e, 0x2deb6a8f8f8e4976, 0xdc06c50cfd86400b, 0x6da0a47deb573da4): the implicit
-// slip keeps sigma once every wheel's slip agrees with eq 12 to kSlipTolerance and iterates the
-// soil rows' levels alone (rover_step.cpp; Broyden moved sigma within that tolerance before),
-// so the loop accepts another point within slip_force_tolerance, on both steppers. The Own pins
-// hold with SimOptions::resolve_rhs_only on (the default) and off: those re-solves as a new
-// right-hand side give the bits of a rebuild (test_dynamics_island_step
-// RightHandSideResolvesGiveTheBitsOfRebuilds).
+// The pins, one set per stepper (SimOptions::stepper: Own, our own island step, and Ode,
+// dWorldStep) and wheel-rock contact (SimOptions::wheel_obstacle_contact: Ode, ODE's cylinder-box
+// merged, the default, and Exact), Release build. Own and Ode agree to rounding
+// (test_dynamics_island_step: ~1e-15 m per step from the same state) but not in the last bits:
+// Own forms A = J M⁻¹ Jᵀ body by body where ODE sums it joint pair by joint pair. Exact gives
+// another depth, normal and point where ODE's axis is not the exact one (a box edge against a
+// rim), which moves rock_field, batch and snapshot_restore; flat_m90 and slope have no rocks and
+// keep the default contact's pins. The Own pins hold with SimOptions::resolve_rhs_only on (the
+// default) and off: those re-solves give the bits of a rebuild (test_dynamics_island_step
+// RightHandSideResolvesGiveTheBitsOfRebuilds). Besides the toolchain, what sets the last bits:
+// the implicit slip's loop accepts any slips and levels within slip_force_tolerance, so where it
+// starts (SimOptions::slip_warm_start) and how it iterates (the slips kept once they agree with
+// eq 12 to kSlipTolerance) pick the point within it; SparseLdlt's own dense kernel has its own
+// order of operations; solve_clamped solves one column per normal force,
+// A_SS⁻¹ (sum_i s_i mu_i A_Si), for a rock contact sliding with both friction rows at their
+// Coulomb bounds.
 struct Pinned {
   std::uint64_t flat_m90, rock_field, slope, batch, snapshot_restore;
 };
-// Session 13: rock_field, batch and snapshot_restore re-pinned on every stepper and contact
-// (were Ode 0xa5ae14c3f86f77db, 0x1d5f0c028d9e00cc, 0xd961a653b345999b; Own 0x34391cc4cbc57104,
-// 0xf598070f1a1b44a5, 0x2605a8ada33de68e; OdeExact 0x32445c0505760dc9, 0xf9860ad597bd4c7c,
-// 0xcf71a0b55a34431b; OwnExact 0xee2d75e82e77558b, 0x50cddc18292dce4e, 0x07ba4ddc6f8ccbcf): a
-// rock contact sliding with both friction rows at their Coulomb bounds is solved with one column
-// per normal force, A_SS⁻¹ (sum_i s_i mu_i A_Si), instead of one per friction row summed after
-// the solves (ode_lcp.cpp, solve_clamped): the same linear algebra, other last bits (the 20-rock
-// drive of benchmarks/profile_rocks ends 6e-15 m from where it did after 850 steps). flat_m90
-// and slope have no rock contacts and keep their pins.
 constexpr Pinned kPinnedOde{0x1561163a1a07ec3bull, 0xd4737a282d3fc135ull, 0xb027c6f8b0655a9dull,
                             0xf9458d0408effcf9ull, 0x1e1cc53aca2bbdccull};
 constexpr Pinned kPinnedOwn{0x2133bbcc30f297d0ull, 0xc629a1e3a74def62ull, 0x40a0fef84ab5cd8dull,
                             0xa017290b0265fd43ull, 0x0a8efc93c7818c0aull};
-// Also session 12: SimOptions::wheel_obstacle_contact (the default, Ode: ODE's cylinder-box merged,
-// as before) gained Exact (a wheel's contact with a rock by the exact separating-axis theorem,
-// cpp/dynamics/cylinder_box.hpp: another depth, normal and point where ODE's axis is not the exact
-// one, e.g. a box edge against a rim, other last bits where it is), which moves rock_field, batch
-// and snapshot_restore; flat_m90 and slope have no rocks and keep the default's pins.
-// kPinnedOwnExact and kPinnedOdeExact pin Exact on both steppers (with the kept slips above).
+// kPinnedOwnExact and kPinnedOdeExact pin Exact on both steppers.
 constexpr Pinned kPinnedOdeExact{0x1561163a1a07ec3bull, 0xac467cb3311a3200ull,
                                  0xb027c6f8b0655a9dull, 0x1dd951c01c312e69ull,
                                  0x4a562ef9f972bb19ull};

@@ -1,7 +1,7 @@
 // The planner's DEM from a perception elevation map (footfall/terrain_map): a box seen with holes
 // round-trips to closed-form heights (raised by k sigma), small holes are filled from above and
 // large ones become obstacle columns the stability map cannot stand on; NaN and empty maps give
-// clear errors; and issue 16's last must-hold: NaN poses throw, planning ends within its budget.
+// clear errors; and NaN poses throw, planning ends within its budget.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -164,7 +164,7 @@ TEST(FootfallTerrain, UnknownCellsAreNeverFootholds) {
   EXPECT_NE(p.reason.find("unreachable"), std::string::npos) << p.reason;
 }
 
-// Issue 16's last must-hold: NaN poses throw; every query ends within its budget, solved or with
+// NaN poses throw; every query ends within its budget, solved or with
 // the timeout reason (never a hang), here on the hard rock field of the benchmark.
 TEST(FootfallTerrain, NanPosesThrowAndPlanningKeepsItsBudget) {
   const walker::WalkerModel model(walker::sdm_b_parameters());

@@ -1,4 +1,4 @@
-// Exact joint limits of the gait transitions (seed 000 eqs 16–17; issue 13 item 6): the limits are
+// Exact joint limits of the gait transitions (seed 000 eqs 16–17): the limits are
 // imposed and reported at the analytic extrema of each cubic segment, so no transition exceeds them
 // between samples.
 #include <gtest/gtest.h>
@@ -75,7 +75,7 @@ TEST(ExactLimits, SplineMaxAbsIsExactAndSeesOvershootBetweenWaypoints) {
   EXPECT_GT(pos, 0.1);  // overshoots the last waypoint
 }
 
-// Issue 13 item 6: t1 swept over the squirming period (40 values) with the nine Table 1
+// t1 swept over the squirming period (40 values) with the nine Table 1
 // configurations; no joint-limit violation above 1e-9, neither densely sampled (2000 points per
 // transition) nor at the analytic extrema, and the reported max_violation agrees with both.
 // Bezier also runs the opposite direction (wheel-walking -> squirming). Linear and Spline run with

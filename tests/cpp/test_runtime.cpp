@@ -98,7 +98,7 @@ TEST(PolicyLoad, MissingOrInvalidMetadata) {
   EXPECT_TRUE(contains(msg, "not valid JSON")) << msg;
 }
 
-// The weights digest (issue 18): the known answer for one float32 buffer c = (0.1, 0.2, 0.3) is
+// The weights digest: the known answer for one float32 buffer c = (0.1, 0.2, 0.3) is
 // sha256("c\n3\n" + its 12 little-endian bytes), computed with Python's hashlib; a file whose
 // weights differ from its metadata's digest is refused, one without a digest loads (warning).
 TEST(PolicyLoad, WeightsChecksum) {
@@ -155,8 +155,8 @@ TEST(PolicyLoad, MetadataLayoutMismatch) {
 }
 
 TEST(PolicyLoad, LegacyLayoutVersionOnlyWithTheSameTable) {
-  // Version 1 files carry one of two tables (issue 18): the runtime's one loads, the other (rl.layout's
-  // former torque 50 N m, elevation 0.3 m, lateral 1 m) is refused naming the first entry that differs.
+  // Version 1 files carry one of two tables: the runtime's one loads, the other (torque 50 N m,
+  // elevation 0.3 m, lateral 1 m) is refused naming the first entry that differs.
   const std::string v1 = metadata_json("layout_version", "\"ernest-obs-v1\"");
   runtime::Policy p(identity_policy("legacy_v1", &v1));
   EXPECT_EQ(p.metadata().layout_version, "ernest-obs-v1");

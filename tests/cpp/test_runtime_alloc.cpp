@@ -1,4 +1,4 @@
-// Issue 17 item 6: the 400 Hz onboard loop does not allocate. This binary replaces the C heap
+// The 400 Hz onboard loop does not allocate. This binary replaces the C heap
 // allocator (malloc and friends) with counting versions (a separate executable so that no other
 // test is affected) and counts heap allocations across many ticks of ControlLoop after a warm-up.
 //

@@ -1,4 +1,4 @@
-"""The ``ernest`` command on wrong invocations (issue 18, item 6): one clear line and exit code 2,
+"""The ``ernest`` command on wrong invocations: one clear line and exit code 2,
 never a traceback; usage of the subcommand that was mistyped; ``--version``; plain-text help."""
 
 from __future__ import annotations

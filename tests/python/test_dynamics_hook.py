@@ -1,4 +1,4 @@
-"""The solver hook made safe (issue 17 item 4): whether ODE's constraint solves reach the sparse
+"""The solver hook checked: whether ODE's constraint solves reach the sparse
 solver is visible from Python (``fast_lcp_active()``, ``SolverStats.fast_lcp``), and a hook found
 off gives one RuntimeWarning."""
 

@@ -1,4 +1,4 @@
-"""Rock contacts through the sparse solver (issue 17): guessed sticking contacts and sliding ones
+"""Rock contacts through the sparse solver: guessed sticking contacts and sliding ones
 with Coulomb's law, counted in SolverStats, switchable with SimOptions.guess_obstacle_contacts."""
 
 import numpy as np

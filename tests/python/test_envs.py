@@ -275,12 +275,12 @@ _WALL = {"soil": "m90", "randomisation": {"bickler_height": 0.2}}
     ("ernest/SlopeEval-v0", CrawlingGaitController, False, {}),  # lifting a wheel on the 20 deg slope
 ])
 def test_evaluation_results_do_not_depend_on_the_step(env_id, controller, passive, kwargs):
-    # Issue 13 item 1 (benchmarks/RESULTS.md, "step independence"): travel reduction within 2 pp
+    # benchmarks/RESULTS.md, "Step size and step independence": travel reduction within 2 pp
     # and cost of transport within 5 % between the default step and a quarter of it. Each row
-    # failed before one fix: the box contacts' force-dependent slip per collision point (ODE
-    # returns 4 or 6 of them, with the step), the §3.4 contact under-resolved without substeps
-    # (the wheel climbing the box face and falling back only below dt / 4), the soil levels
-    # lagging a step, eq 32's pressure spring explicit in the sinkage at 0.025 s.
+    # guards one part of the model: the box contacts' force-dependent slip shared per contact
+    # (ODE returns 4 or 6 points, with the step), the §3.4 contact resolved at the default step
+    # (the wheel climbing the box face and falling back), the soil levels solved within the
+    # step, eq 32's pressure spring linearised in the sinkage.
     from ernest_cpp.dynamics import SimOptions
     from ernest_cpp.evaluate import run_episode
 

@@ -1,4 +1,4 @@
-"""The environments as an outside client uses them (issue 18, item 7): gym.make without importing
+"""The environments as an outside client uses them: gym.make without importing
 us first, pickling and deep copies, reset options, and a step before reset."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""FootFall on the perception stack's terrain (issue 16): the binding of terrain_from_map, its
+"""FootFall on the perception stack's terrain: the binding of terrain_from_map, its
 errors, and the end-to-end path stereo → fused map → planner DEM → plan, re-checked densely
 against the ground truth."""
 

@@ -1,8 +1,8 @@
-"""Issue 18: Ctrl-C reaches Python promptly from long C++ calls that release the GIL (it used to be
-ignored for 32 s inside ``step_n(3e6)``), and the object is usable afterwards (or says it is not).
+"""Ctrl-C reaches Python promptly from long C++ calls that release the GIL (within a unit of work,
+not at the end of e.g. ``step_n(3e6)``), and the object is usable afterwards (or says it is not).
 
 Each case runs in a child process, which sends SIGINT to itself from a timer thread while the main
-thread is inside the call: a failure then cannot hang or kill the test session. The child prints,
+thread is inside the call: a failure then cannot hang or kill the test run. The child prints,
 per case, the delay from the signal to the KeyboardInterrupt and the result of a call made after.
 """
 

@@ -1,9 +1,8 @@
-"""Issue 18: one observation scale table. ``rl/layout.py`` used to hold a second table (torque
-50 N·m, elevation 0.3 m, lateral 1 m) under the same version string as the C++ one
-(``sensing::ObservationScales``: 40, 0.5, 2), which the environments, the exported policies and
-the runtime really use. Now the C++ table is the only one (bound to Python), the layout version
-is 2, a version 1 policy loads only if it carries that table, and the committed default policy
-acts exactly as before.
+"""One observation scale table: the C++ one (``sensing::ObservationScales``: torque 40 N·m,
+elevation 0.5 m, lateral 2 m), bound to Python, which the environments, the exported policies
+and the runtime use. Layout version 1 files exist with another table under the same version
+string (torque 50 N·m, elevation 0.3 m, lateral 1 m); the layout version is 2, a version 1 policy
+loads only if it carries the C++ table, and the legacy policy acts bit for bit as recorded.
 """
 
 from __future__ import annotations
@@ -22,12 +21,12 @@ from ernest_cpp.rl.networks import Actor
 from test_runtime import one_thread, run_runtime  # noqa: F401  (one_thread: a fixture)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-# A policy exported with layout ernest-obs-v1 (the C++ normalisation table before the layout
-# version was bumped): a legacy file that must keep loading and acting bit for bit.
+# A policy exported with layout ernest-obs-v1 and the C++ normalisation table: a legacy file
+# that must keep loading and acting bit for bit.
 LEGACY_POLICY = os.path.join(ROOT, "tests", "data", "legacy_policy_v1.pt")
 
 # (normalised observation seed, command) of that policy, one observation per call on one
-# thread, recorded with torch alone before this change (commit ba7d919): float32 bit patterns.
+# thread, recorded with torch alone: float32 bit patterns.
 RECORDED_COMMANDS = [
     ["0x1.9987c4p-3", "-0x1.c4898ep-3", "-0x1.6d0478p-5"],
     ["0x1.9974ecp-3", "-0x1.655c76p-2", "0x1.639728p-3"],
@@ -82,7 +81,7 @@ def test_default_policy_in_the_cpp_runtime_acts_as_in_python(tmp_path):
 
 
 def old_python_table_layout() -> L.ObservationLayout:
-    """A version 1 layout with the table rl/layout.py used to hold (the one that never matched)."""
+    """A version 1 layout with the other table (torque 50, elevation 0.3, lateral 1)."""
     sc = sensing.ObservationScales()
     sc.torque, sc.elevation, sc.lateral = 50.0, 0.3, 1.0
     lay = L.ernest_layout(sc)

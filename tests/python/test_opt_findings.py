@@ -1,4 +1,4 @@
-"""Exact joint limits of the transitions (issue 13 item 6) and the seed 000 §6 findings check
+"""Exact joint limits of the transitions and the seed 000 §6 findings check
 (``transitions.paper_findings``)."""
 
 from __future__ import annotations

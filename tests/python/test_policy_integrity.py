@@ -1,4 +1,4 @@
-"""Integrity of exported policies and training checkpoints (issue 18, item 5): altered weights
+"""Integrity of exported policies and training checkpoints: altered weights
 are refused in Python and in the C++ runtime, a policy is checked before ``ernest evaluate`` runs
 anything, a writer killed mid-checkpoint leaves nothing behind for good, a corrupt latest
 checkpoint points at the newest intact one, and pruning never deletes the checkpoint just saved.

@@ -1,4 +1,4 @@
-"""Issue 18 item 8: property-based tests (hypothesis) over the Python API.
+"""Property-based tests (hypothesis) over the Python API.
 
 Two kinds of properties:
 - input validation: every option struct of the C++ core refuses NaN in each of its float fields
@@ -95,8 +95,8 @@ def test_random_field_values_pass_or_name_the_field(item, value):
     (ST.CalibrationOptions, "k_min", 1e12),              # coupled: k_max <= k_min
 ])
 def test_a_coupled_bound_names_the_field_that_was_changed(cls, field, value):
-    # Found by a longer run of the property test above (session 7): the message named only the
-    # other field of the pair.
+    # A longer run of the property test above finds this case: the message must name the field
+    # that was changed, not only the other field of the pair.
     obj = cls()
     setattr(obj, field, value)
     with pytest.raises(ValueError, match=field):

@@ -1,4 +1,4 @@
-"""Training, consolidation and evaluation on a Ray cluster (issue 19): a local two-CPU cluster,
+"""Training, consolidation and evaluation on a Ray cluster: a local two-CPU cluster,
 the sync mode equal bit for bit to the local trainer, a killed worker recovered, and the toy
 point mass learned through the async mode.
 

@@ -1,4 +1,4 @@
-"""Issue 18 items 1–4: inputs that aborted the process, one simulator from two threads, errors
+"""Inputs that could abort the process, one simulator from two threads, errors
 naming the wrong thing, and NaN or nonsense that passed silently. Each error must name the
 argument (and its allowed range where it has one)."""
 
@@ -18,7 +18,7 @@ from ernest_cpp import cli, dynamics as D, opt as O, soil as S
 from ernest_cpp.envs import ErnestVectorEnv
 
 
-# ---- item 1: values that passed validation and aborted the process ------------------------------
+# ---- values that must not abort the process -----------------------------------------------------
 
 def test_commands_have_physical_ranges_named_in_the_error():
     c = D.Commands()
@@ -70,7 +70,7 @@ def test_batch_flag_columns_must_be_0_or_1():
     b.step(np.zeros((1, D.COMMAND_SIZE)), 1)
 
 
-# ---- item 2: one simulator, two threads -----------------------------------------------------------
+# ---- one simulator, two threads ------------------------------------------------------------------
 
 def test_two_threads_on_one_sim_are_refused_not_crashed():
     sim = D.make_sim("soil")
@@ -108,7 +108,7 @@ def test_two_threads_on_one_sim_are_refused_not_crashed():
     assert "one thread at a time" in D.RoverSim.__doc__.lower()
 
 
-# ---- item 3: errors naming the wrong thing --------------------------------------------------------
+# ---- errors name the right thing -----------------------------------------------------------------
 
 @pytest.mark.parametrize("field", ["a1", "b1"])
 def test_soil_a1_b1_are_named_with_their_range(field):
@@ -159,7 +159,7 @@ def test_slope_demo_vx_names_the_option(capsys):
     assert "RoverSim" not in err
 
 
-# ---- item 4: NaN or nonsense that passed silently -------------------------------------------------
+# ---- NaN or nonsense must not pass silently -----------------------------------------------------
 
 def test_slsqp_nan_objective_raises():
     with pytest.raises(ValueError, match="objective\\(x\\) returned a non-finite value"):

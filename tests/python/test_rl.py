@@ -526,7 +526,7 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
     assert cli.main(["train", "--env", "ernest-toy/DoesNotExist-v0"]) == 2
     err = capsys.readouterr().err
     assert "unknown environment id 'ernest-toy/DoesNotExist-v0'" in err and POINT_MASS in err
-    # issue 18: an unknown rover id names itself and the valid ids, not a missing package
+    # an unknown rover id names itself and the valid ids, not a missing package
     assert cli.main(["train", "--env", "ernest/Moon-v0"]) == 2
     err = capsys.readouterr().err
     assert "unknown environment id 'ernest/Moon-v0'" in err, err

@@ -1,4 +1,4 @@
-"""Onboard C++ runtime (issue 7) against the Python path.
+"""Onboard C++ runtime against the Python path.
 
 The parity test exports a (randomly initialised, untrained) actor with ``ernest_cpp.rl.export``,
 runs whole episodes with the Python environment and the Python actor (eager PyTorch, wrapped in the
@@ -186,8 +186,8 @@ def test_runtime_rejects_wrong_files_clearly(exported, tmp_path):
     r = run_runtime("--policy", str(tmp_path / "missing.pt"), "--scenario", "flat", "--seed", "1",
                     "--duration", "1")
     assert r.returncode == 1 and "missing file" in r.stderr and "missing.pt" in r.stderr
-    # A policy exported with another normalisation table (the one rl.layout used to hold under
-    # the same version 1) does not match the runtime's observation layout: refused before
+    # A policy exported with another normalisation table (version 1 files may carry one under
+    # the same version string) does not match the runtime's observation layout: refused before
     # anything runs, naming the first entry that differs.
     other = str(tmp_path / "other_layout.pt")
     sc = sensing.ObservationScales()
@@ -202,7 +202,7 @@ def test_runtime_rejects_wrong_files_clearly(exported, tmp_path):
 
 
 def test_runtime_usage_errors_are_distinct_with_exit_code_2(tmp_path):
-    # issue 18 item 3: each usage error has its own message; all exit with 2 (documented in --help)
+    # each usage error has its own message; all exit with 2 (documented in --help)
     r = run_runtime("--help")
     assert r.returncode == 0 and "exit status" in r.stdout and "2 usage error" in r.stdout
     ok = ["--policy", "p.pt", "--scenario", "flat", "--seed", "1", "--duration", "1"]

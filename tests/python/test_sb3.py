@@ -1,5 +1,5 @@
-"""Stable-Baselines3 on the C++ batched environments through ``envs.sb3.ErnestSB3VecEnv``
-(issue 18, item 7): the adapter gives exactly the transitions of SB3's own DummyVecEnv over the
+"""Stable-Baselines3 on the C++ batched environments through ``envs.sb3.ErnestSB3VecEnv``:
+the adapter gives exactly the transitions of SB3's own DummyVecEnv over the
 single Gymnasium env (SB3's autoreset and terminal-observation handling as the reference), and
 SB3's TD3 trains through it unmodified."""
 
