@@ -68,6 +68,8 @@ void bind_envs(py::module_& m) {
       .def_readwrite("max_rock_density", &ScenarioOptions::max_rock_density, "[1/m^2]")
       .def_readwrite("clear_radius", &ScenarioOptions::clear_radius, "[m]")
       .def_readwrite("eval_slope_deg", &ScenarioOptions::eval_slope_deg, "[deg]")
+      .def_readwrite("eval_slope_spread_deg", &ScenarioOptions::eval_slope_spread_deg,
+                     "[deg] SlopeEval angle drawn per trial within eval_slope_deg +- this (0: fixed)")
       .def_readwrite("range_scale", &ScenarioOptions::range_scale,
                      "multiplies Table 3's maximum bounds (tilt, yaw/lateral/heading offsets, "
                      "orientations); 0..1")

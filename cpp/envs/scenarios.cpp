@@ -113,6 +113,8 @@ void ScenarioOptions::validate() const {
   require_in_range(o, "max_rock_density", max_rock_density, 0.0, 5.0);
   require_in_range(o, "clear_radius", clear_radius, 0.0, 10.0);
   require_in_range(o, "eval_slope_deg", eval_slope_deg, 0.0, 45.0);
+  require_in_range(o, "eval_slope_spread_deg", eval_slope_spread_deg, 0.0,
+                   std::min(eval_slope_deg, 45.0 - eval_slope_deg));
   require_in_range(o, "range_scale", range_scale, 0.0, 1.0);
   require_in_range(o, "step_height_range[0]", step_height_range[0], 0.0, 1.0);
   require_in_range(o, "step_height_range[1]", step_height_range[1], step_height_range[0], 1.0);
@@ -236,6 +238,10 @@ Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
     s_start = 1.5;
   } else if (kind == ScenarioKind::SlopeEval) {
     s_angle = options.eval_slope_deg * kDeg;
+    if (options.eval_slope_spread_deg > 0.0) {  // not a Table 3 bound: range_scale leaves it
+      const double spread = options.eval_slope_spread_deg * kDeg;
+      s_angle += rng.uniform(-spread, spread);
+    }
     s_bs = 0.5;
     s_be = 2.0;
     s_len = 12.0;  // long constant-slope section: the whole run is on the slope

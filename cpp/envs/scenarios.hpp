@@ -31,6 +31,11 @@ struct ScenarioOptions {
   double max_rock_density = 0.5;  ///< [1/m^2] (Table 3)
   double clear_radius = 1.2;      ///< no rock within this distance of the start [m]
   double eval_slope_deg = 20.0;   ///< SlopeEval angle (Table 6)
+  /// SlopeEval: the angle is drawn per trial, uniformly within eval_slope_deg +- this [deg]. The
+  /// gimbal gaits on the slope are chaotic (travel reduction moves by several points between
+  /// slopes 1 deg apart), so a comparison over seeds needs an ensemble; 0 (the default) keeps the
+  /// course exactly eval_slope_deg and every seed the same episode.
+  double eval_slope_spread_deg = 0.0;
   /// Multiplies every Table 3 maximum bound (ground tilt, initial yaw, lateral and heading
   /// offsets, rock and step orientations): 0 = nominal trials, 1 = the paper's ranges (curricula).
   double range_scale = 1.0;

@@ -1,6 +1,7 @@
 // Tests of cpp/envs: Perlin noise and the seed 004 §4.5 / Table 3 scenario generators.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -229,6 +230,29 @@ TEST(Scenarios, SlopesHaveTheSampledAngle) {
   }
   EXPECT_GT(direct, 10);
   EXPECT_GT(full, 10);
+}
+
+TEST(Scenarios, EvaluationSlopeSpreadDrawsTheAnglePerSeed) {
+  ScenarioOptions o;
+  o.kind = ScenarioKind::SlopeEval;
+  o.eval_slope_spread_deg = 0.5;
+  double lo = 90.0, hi = 0.0;
+  for (std::uint64_t seed = 0; seed < 40; ++seed) {
+    const Scenario s = generate_scenario(o, seed);
+    const double deg = std::atan(s.peak_slope) / kDeg;
+    EXPECT_NEAR(s.slope_angle / kDeg, deg, 1e-9);
+    EXPECT_LE(std::abs(deg - 20.0), 0.5 + 1e-12);
+    lo = std::min(lo, deg);
+    hi = std::max(hi, deg);
+    EXPECT_EQ(generate_scenario(o, seed).slope_angle, s.slope_angle);  // same seed, same course
+  }
+  EXPECT_GT(hi - lo, 0.6);  // 40 uniform draws over 1 deg cover most of it
+  o.eval_slope_spread_deg = 0.0;
+  EXPECT_NEAR(std::atan(generate_scenario(o, 7).peak_slope), 20 * kDeg, 1e-12);
+  o.eval_slope_spread_deg = 25.0;  // would leave [0, 45] deg
+  EXPECT_THROW(generate_scenario(o, 0), std::invalid_argument);
+  o.eval_slope_spread_deg = -1.0;
+  EXPECT_THROW(generate_scenario(o, 0), std::invalid_argument);
 }
 
 TEST(Scenarios, EvaluationCourses) {

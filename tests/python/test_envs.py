@@ -328,6 +328,40 @@ def test_randomisation_ranges_are_kwargs():
         E.ErnestEnv("step", randomisation={"range_scale": 3})
 
 
+def test_reward_weights_are_kwargs_and_shape_the_reward():
+    # eq 38: only the lateral term depends on w_delta, so two envs on the same episode differ by
+    # exactly (w2 - w1) * delta^2 per step
+    kw = {"episode_length": 3.0, "randomisation": {"range_scale": 1.0}}
+    a = E.ErnestEnv("slope", **kw)
+    b = E.ErnestEnv("slope", reward={"w_delta": 1.0}, **kw)
+    a.reset(seed=4)
+    b.reset(seed=4)
+    act = np.zeros(3)
+    for _ in range(4):
+        _, ra, *_, ia = a.step(act)
+        _, rb, *_, ib = b.step(act)
+        d = ia["lateral_deviation"]
+        assert d == pytest.approx(ib["lateral_deviation"]) and abs(d) > 0.01
+        assert rb - ra == pytest.approx(-0.9 * d * d, rel=1e-5, abs=1e-6)
+    with pytest.raises(ValueError, match="w_delta"):
+        E.ErnestEnv("slope", reward={"w_delta": -1.0})
+    with pytest.raises(ValueError, match="no weight 'w_lat'"):
+        E.ErnestEnv("slope", reward={"w_lat": 1.0})
+
+
+def test_slope_course_angle_spread_is_drawn_per_seed():
+    angles = set()
+    for seed in range(5):
+        env = E.ErnestEnv("slope_eval", randomisation={"eval_slope_spread_deg": 0.5})
+        env.reset(seed=seed)
+        deg = np.degrees(env.scenario.slope_angle)
+        assert abs(deg - 20.0) <= 0.5
+        angles.add(round(deg, 9))
+    assert len(angles) == 5
+    with pytest.raises(ValueError, match="eval_slope_spread_deg"):
+        E.ErnestEnv("slope_eval", randomisation={"eval_slope_spread_deg": 30.0})
+
+
 def test_bickler_trap_options_are_kwargs_and_its_ground_is_registered():
     # The course of benchmarks/RESULTS.md ("Bickler trap"): Table 2's dry sand by default.
     assert gym.make("ernest/BicklerTrap-v0").unwrapped.options.soil == "dry_sand"

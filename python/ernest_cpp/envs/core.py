@@ -33,17 +33,22 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
                  physics_dt: float = 0.0, slip_force_tolerance: float = 0.0, obstacle_substeps: int = 0, episode_length: float = 0.0, rigid_ground: bool = False,
                  eps_slip: float = 1e4, eps_motion: float = 0.01, fts_noise_force: float = 0.0, fts_noise_torque: float = 0.0,
                  start_speed: float = 0.0, randomisation: dict | None = None,
-                 terrain_source: str = "truth", stereo=None) -> _envs.EnvOptions:
+                 terrain_source: str = "truth", stereo=None,
+                 reward: dict | None = None) -> _envs.EnvOptions:
     """EnvOptions from keyword arguments (the Gymnasium kwargs), validated.
 
     ``randomisation`` sets ScenarioOptions fields: ``range_scale`` (0..1, multiplies Table 3's
     maximum bounds: tilt, yaw/lateral/heading offsets, orientations), ``step_height_range``,
     ``slope_angle_range_deg``, ``ripple_amplitude_range`` ((min, max) pairs), ``max_rock_density``,
-    ``p_instance``, ``noise_unit``, ``grid_spacing``, ``clear_radius``, ``eval_slope_deg``.
+    ``p_instance``, ``noise_unit``, ``grid_spacing``, ``clear_radius``, ``eval_slope_deg``,
+    ``eval_slope_spread_deg`` (SlopeEval's angle drawn per seed within ± this).
 
     ``terrain_source``: ``"truth"`` (default: elevation samples from the simulator's terrain) or
     ``"stereo"`` (from the elevation map fused from simulated stereo, seed 004 §2.4); ``stereo``
     is an optional ``perception.StereoMapperOptions`` (camera, matcher, map, fusion rate).
+
+    ``reward`` sets eq 38's weights (``sensing.RewardWeights``): ``w_s``, ``w_delta``, ``w_tau``
+    (defaults 2, 0.1, 1e-4: the paper's; it calls them tunable).
     """
     if scenario not in SCENARIO_ALIASES:
         raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(sorted(SCENARIO_ALIASES))}")
@@ -71,6 +76,10 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
     o.terrain_source = str(terrain_source)
     if stereo is not None:
         o.stereo = stereo
+    for key, value in (reward or {}).items():
+        if key not in ("w_s", "w_delta", "w_tau"):
+            raise ValueError(f"reward has no weight {key!r}; allowed: w_s, w_delta, w_tau")
+        setattr(o.weights, key, float(value))
     o.validate()
     return o
 

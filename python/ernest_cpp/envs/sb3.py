@@ -1,4 +1,4 @@
-"""Stable-Baselines3 ``VecEnv`` over the C++ batched environments (issue 18).
+"""Stable-Baselines3 ``VecEnv`` over the C++ batched environments.
 
 ``ErnestSB3VecEnv("ernest/Slope-v0", num_envs=8)`` steps all simulations in one C++ call (threads,
 GIL released) and presents SB3's conventions, so its algorithms train on it unmodified:

@@ -48,7 +48,7 @@ def ensure_registered(env_id: str) -> None:
 
     have_rover_envs = importlib.util.find_spec("ernest_cpp.envs") is not None
     if have_rover_envs:
-        importlib.import_module("ernest_cpp.envs")  # the rover envs register on import (issue 5)
+        importlib.import_module("ernest_cpp.envs")  # the rover envs register on import
     if env_id not in gym.registry:
         namespace = env_id.split("/", 1)[0] if "/" in env_id else None
         if namespace is not None and not have_rover_envs and namespace == "ernest":

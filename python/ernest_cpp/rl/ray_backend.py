@@ -1,4 +1,4 @@
-"""Ray plumbing for training beyond one machine (issue 19): the cluster connection, the rollout
+"""Ray plumbing for training beyond one machine: the cluster connection, the rollout
 worker actor, a vector env whose simulations live in those actors, and a fan-out of independent
 episodes (``ernest evaluate`` / ``ernest consolidate`` with ``--backend ray``).
 
