@@ -14,14 +14,16 @@ import time
 import numpy as np
 
 from ernest_cpp import evaluate as ev
-from ernest_cpp.reproduce import wheels_over
+from ernest_cpp.reproduce import SLOPE_SPREAD_DEG, wheels_over
 
+# each seed's slope within 20 +- 0.5 deg (ernest reproduce's ensemble): the slope gaits are chaotic
+_ENSEMBLE = {"randomisation": {"eval_slope_spread_deg": SLOPE_SPREAD_DEG}}
 SCENARIOS = [  # (label, env id, kwargs, obstacle kind or None)
     ("rock field", "ernest/RockField-v0", {}, None),
     ("ripples", "ernest/Ripples-v0", {}, None),
     ("mixed course", "ernest/Course-v0", {}, None),
-    ("20 deg slope, dry M90", "ernest/SlopeEval-v0", {"soil": "m90"}, None),
-    ("20 deg slope, wet sand", "ernest/SlopeEval-v0", {"soil": "wet_sand"}, None),
+    ("20 deg slope, dry M90", "ernest/SlopeEval-v0", {"soil": "m90", **_ENSEMBLE}, None),
+    ("20 deg slope, wet sand", "ernest/SlopeEval-v0", {"soil": "wet_sand", **_ENSEMBLE}, None),
     ("wheel-high step", "ernest/WheelStep-v0", {}, "step"),
     ("Bickler trap", "ernest/BicklerTrap-v0", {}, "bickler"),
 ]
@@ -39,12 +41,12 @@ def row(env_id, kwargs, kind, ctrl, passive, seeds, first_seed=0) -> dict:
         prog.append(float(info["path_progress"]))
         tr.append(float(m["travel_reduction"]))
         cot.append(float(m["cost_of_transport"]))
-        lat.append(max(abs(env.scenario.path.lateral_deviation(h["position"][0], h["position"][1]))
-                       for h in hist))
+        lat.append(ev.max_lateral(env, hist))
         if kind:
             crossed += wheels_over(kind, env) == 4
     finite = [c for c in cot if np.isfinite(c)]
-    return {"progress": np.mean(prog), "tr": 100 * np.mean(tr), "lat": np.max(lat),
+    return {"progress": np.mean(prog), "tr": 100 * np.mean(tr), "tr_std": 100 * np.std(tr),
+            "lat": np.max(lat),
             "cot": np.mean(finite) if len(finite) == len(cot) else float("inf"),
             "crossed": crossed if kind else None}
 
@@ -59,7 +61,8 @@ def main() -> None:
     ctrls = ev.controllers(a.policy)
     extra = {"physics_dt": DT / a.dt_divisor} if a.dt_divisor > 1 else {}
     print(f"physics step {DT / a.dt_divisor:g} s, seeds 0-{a.seeds - 1}, policy {a.policy}")
-    print("| course | controller | progress [m] | travel reduction [%] | CoT | max lateral [m] | "
+    print("| course | controller | progress [m] | travel reduction [%] (± std over seeds) | CoT | "
+          "max lateral [m] | "
           "crossed |")
     print("|---|---|---|---|---|---|---|")
     t0 = time.perf_counter()
@@ -69,7 +72,8 @@ def main() -> None:
         for name, (ctrl, passive) in ctrls.items():
             r = row(env_id, {**kwargs, **extra}, kind, ctrl, passive, a.seeds)
             crossed = f"{r['crossed']}/{a.seeds}" if kind else "—"
-            print(f"| {label} | {name} | {r['progress']:.2f} | {r['tr']:.1f} | {r['cot']:.3f} | "
+            print(f"| {label} | {name} | {r['progress']:.2f} | {r['tr']:.1f} ± {r['tr_std']:.1f} | "
+                  f"{r['cot']:.3f} | "
                   f"{r['lat']:.2f} | {crossed} |", flush=True)
     print(f"({time.perf_counter() - t0:.0f} s)")
 

@@ -45,9 +45,7 @@ def main() -> None:
                           "physics_dt": DT / div}
                     m, hist, env, _ = ev.run_episode("ernest/SlopeEval-v0", kw, ctrl, passive, 0)
                     tr.append(100 * m["travel_reduction"])
-                    lat.append(max(abs(env.scenario.path.lateral_deviation(h["position"][0],
-                                                                           h["position"][1]))
-                                   for h in hist))
+                    lat.append(ev.max_lateral(env, hist))
                 print(f"| {soil} | {DT / div:g} | {name} | {np.mean(tr):.1f} ± {np.std(tr):.1f} | "
                       f"{max(lat):.2f} |", flush=True)
     print(f"({time.perf_counter() - t0:.0f} s)")

@@ -101,6 +101,14 @@ def run_episode(env_id: str, kwargs: dict, policy, passive: bool, seed: int):
     return u.metrics, u.history, u, info
 
 
+def max_lateral(env, history) -> float:
+    """The largest |lateral deviation| from the desired path (eq 37) over an episode's
+    ``history`` (``run_episode``'s), in metres."""
+    path = env.scenario.path
+    return float(max(abs(path.lateral_deviation(h["position"][0], h["position"][1]))
+                     for h in history))
+
+
 def _plots(results, out_dir: str) -> list[str]:
     import matplotlib
 

@@ -93,6 +93,20 @@ def test_pipeline_selects_among_kept_agents_on_validation_episodes(tmp_path):
     again: list[str] = []
     P.run_pipeline(cfg, stages=("consolidate", "select"), log=again.append)
     assert "  consolidation seed 3: done" in again and "[3/6] select: done" in again
+    # Choosing again (more seeds, or after a kill) reuses each candidate's saved results; a
+    # corrupt results file is evaluated again, to the same figures.
+    first = open(os.path.join(out, "selection.csv")).read()
+    broken = os.path.join(out, "consolidated", "checkpoints", "iteration-00000010", "validation.json")
+    with open(broken, "w") as fh:
+        fh.write("{not json")
+    os.remove(os.path.join(out, "selected.json"))
+    third: list[str] = []
+    P.run_pipeline(cfg, stages=("select",), log=third.append)
+    saved = [ln for ln in third if "(saved results)" in ln]
+    assert len(saved) == len(kept) - 1 and not any("consolidated/checkpoints/iteration-00000010"
+                                                   in ln for ln in saved)
+    assert open(os.path.join(out, "selection.csv")).read() == first
+    assert json.load(open(broken))["results"]["step"]["crossed"] is not None
 
 
 def test_pipeline_resumes_an_interrupted_specialist(tmp_path):

@@ -146,32 +146,22 @@ def _progress_line(name: str, run_dir: str, total: int) -> str:
             f"{p['elapsed_s'] / 60:.1f} min{prog}")
 
 
-def run_specialists(cfg: dict, log=print) -> list[str]:
-    out, preset = cfg["out"], cfg["preset"]
-    todo = [(name, s, os.path.join(out, name)) for name, s in cfg["specialists"].items()]
-    dirs = [run_dir for _, _, run_dir in todo]
-    running: dict[str, tuple] = {}
-    t_last = 0.0
+def _in_parallel(jobs: list, parallel: int, what: str, log=print, progress=None,
+                 every: float = 0.0) -> None:
+    """Runs ``jobs`` ``[(name, start, finished)]``, at most ``parallel`` at a time: ``start()``
+    returns ``(process, log path)``, or None when there is nothing left to do; ``finished()`` is
+    called when the process exits cleanly. A failure stops the others and raises. ``progress(name)``
+    returns a line logged for every running job each ``every`` seconds."""
+    todo, running, t_last = list(jobs), {}, 0.0
     while todo or running:
-        while todo and len(running) < cfg["parallel"]:
-            name, s, run_dir = todo.pop(0)
-            done_step = _checkpoint_step(run_dir)  # now, not when the pipeline started
-            if done_step is not None and done_step >= s["steps"]:
-                log(f"specialist {name}: done ({done_step} transitions)")
-                continue
-            # A resumed run keeps its saved settings (the preset is not read again).
-            args = ["train", "--scenario", s["scenario"], "--steps", str(s["steps"]),
-                    "--run-dir", run_dir, "--set", "log.progress_bar=false"]
-            args += ["--resume"] if done_step is not None else ["--preset", preset]
-            for a in s["set"]:
-                args += ["--set", str(a)]
-            log(f"specialist {name}: {'resuming at ' + str(done_step) if done_step else 'start'}"
-                f" ({s['steps']} transitions, log {run_dir}.log)")
-            os.makedirs(out, exist_ok=True)
-            running[name] = (_ernest(args, run_dir + ".log"), run_dir, s["steps"])
+        while todo and len(running) < parallel:
+            name, start, finished = todo.pop(0)  # started now, not when the pipeline started
+            started = start()
+            if started is not None:
+                running[name] = (*started, finished)
         time.sleep(1.0)
         for name in list(running):
-            proc, run_dir, total = running[name]
+            proc, log_path, finished = running[name]
             rc = proc.poll()
             if rc is None:
                 continue
@@ -179,14 +169,43 @@ def run_specialists(cfg: dict, log=print) -> list[str]:
             if rc != 0:
                 for p, _, _ in running.values():
                     p.terminate()
-                raise RuntimeError(f"specialist {name} failed with exit code {rc} "
-                                   f"(log: {run_dir}.log)")
-            log(f"specialist {name}: done; {_progress_line(name, run_dir, total)}")
-        if running and time.monotonic() - t_last >= cfg["progress_every"]:
+                raise RuntimeError(f"{what} {name} failed with exit code {rc} (log: {log_path})")
+            finished()
+        if progress is not None and running and time.monotonic() - t_last >= every:
             t_last = time.monotonic()
-            for name, (_, run_dir, total) in running.items():
-                log("  " + _progress_line(name, run_dir, total))
-    return dirs
+            for name in running:
+                log("  " + progress(name))
+
+
+def run_specialists(cfg: dict, log=print) -> list[str]:
+    out, preset = cfg["out"], cfg["preset"]
+    specs = {name: (s, os.path.join(out, name)) for name, s in cfg["specialists"].items()}
+
+    def start(name):
+        s, run_dir = specs[name]
+        done_step = _checkpoint_step(run_dir)
+        if done_step is not None and done_step >= s["steps"]:
+            log(f"specialist {name}: done ({done_step} transitions)")
+            return None
+        # A resumed run keeps its saved settings (the preset is not read again).
+        args = ["train", "--scenario", s["scenario"], "--steps", str(s["steps"]),
+                "--run-dir", run_dir, "--set", "log.progress_bar=false"]
+        args += ["--resume"] if done_step is not None else ["--preset", preset]
+        for a in s["set"]:
+            args += ["--set", str(a)]
+        log(f"specialist {name}: {'resuming at ' + str(done_step) if done_step else 'start'}"
+            f" ({s['steps']} transitions, log {run_dir}.log)")
+        os.makedirs(out, exist_ok=True)
+        return _ernest(args, run_dir + ".log"), run_dir + ".log"
+
+    def progress(name):
+        s, run_dir = specs[name]
+        return _progress_line(name, run_dir, s["steps"])
+
+    jobs = [(name, lambda n=name: start(n),
+             lambda n=name: log(f"specialist {n}: done; {progress(n)}")) for name in specs]
+    _in_parallel(jobs, cfg["parallel"], "specialist", log, progress, cfg["progress_every"])
+    return [run_dir for _, run_dir in specs.values()]
 
 
 def consolidation_dirs(cfg: dict) -> list[str]:
@@ -199,35 +218,24 @@ def run_consolidations(cfg: dict, dirs: list[str], cons_dirs: list[str], log=pri
     """``ernest consolidate`` once per seed, ``parallel`` processes at a time; a seed whose
     folder holds its final agent is skipped (a killed one starts again: it has no checkpoints
     to resume from, and takes minutes)."""
-    todo = list(zip(cfg["consolidate"]["seeds"], cons_dirs))
-    running = []
-    while todo or running:
-        while todo and len(running) < cfg["parallel"]:
-            seed, d = todo.pop(0)
-            if os.path.exists(os.path.join(d, "checkpoints", "LATEST")):
-                log(f"  consolidation seed {seed}: done")
-                continue
-            args = ["consolidate", *dirs, "--out", d, "--preset", cfg["preset"],
-                    "--set", "log.progress_bar=false", "--set", f"seed={seed}"]
-            if "select" in cfg:
-                args.append("--no-eval")  # the selected agent's table is written by select
-            for a in cfg["consolidate"]["set"]:
-                args += ["--set", str(a)]
-            log(f"  consolidation seed {seed}: start (log {d}.log)")
-            running.append((_ernest(args, d + ".log"), seed, d))
-        time.sleep(1.0)
-        for item in list(running):
-            proc, seed, d = item
-            rc = proc.poll()
-            if rc is None:
-                continue
-            running.remove(item)
-            if rc != 0:
-                for p, _, _ in running:
-                    p.terminate()
-                raise RuntimeError(f"consolidation seed {seed} failed with exit code {rc} "
-                                   f"(log: {d}.log)")
+
+    def start(seed, d):
+        if os.path.exists(os.path.join(d, "checkpoints", "LATEST")):
             log(f"  consolidation seed {seed}: done")
+            return None
+        args = ["consolidate", *dirs, "--out", d, "--preset", cfg["preset"],
+                "--set", "log.progress_bar=false", "--set", f"seed={seed}"]
+        if "select" in cfg:
+            args.append("--no-eval")  # the selected agent's table is written by select
+        for a in cfg["consolidate"]["set"]:
+            args += ["--set", str(a)]
+        log(f"  consolidation seed {seed}: start (log {d}.log)")
+        return _ernest(args, d + ".log"), d + ".log"
+
+    jobs = [(f"seed {seed}", lambda v=seed, d=d: start(v, d),
+             lambda v=seed: log(f"  consolidation seed {v}: done"))
+            for seed, d in zip(cfg["consolidate"]["seeds"], cons_dirs)]
+    _in_parallel(jobs, cfg["parallel"], "consolidation", log)
 
 
 def _select_stage(cfg: dict, log=print) -> None:

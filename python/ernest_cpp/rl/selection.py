@@ -15,6 +15,10 @@ the trap in as many; a lower travel reduction than the crawling gait's on every 
 tracked within ``select.max_lateral`` metres on every one), then the obstacle crossings (the
 paper's headline: the fractions of step and trap episodes crossed, summed), then the lower mean
 slope travel reduction.
+
+Each candidate's results are saved in its checkpoint folder (``validation.json``, with the courses
+they were run on), so a killed selection, or one over more consolidation seeds, evaluates only
+the candidates it has not seen.
 """
 
 from __future__ import annotations
@@ -82,10 +86,8 @@ def _episode(policy, env_id: str, kwargs: dict, kind: str | None, seed: int,
     from ..reproduce import wheels_over
 
     m, hist, env, _ = ev.run_episode(env_id, kwargs, policy, passive, seed)
-    lat = max(abs(env.scenario.path.lateral_deviation(h["position"][0], h["position"][1]))
-              for h in hist)
     over = bool(kind) and wheels_over(kind, env) == 4
-    return float(m["travel_reduction"]), float(lat), over
+    return float(m["travel_reduction"]), ev.max_lateral(env, hist), over
 
 
 def course_results(policy, courses) -> dict:
@@ -95,7 +97,7 @@ def course_results(policy, courses) -> dict:
     out = {}
     for label, env_id, kwargs, kind, seeds in courses:
         runs = [_episode(policy, env_id, kwargs, kind, s) for s in seeds]
-        out[label] = {"crossed": np.mean([r[2] for r in runs]) if kind else None,
+        out[label] = {"crossed": float(np.mean([r[2] for r in runs])) if kind else None,
                       "tr": float(np.mean([r[0] for r in runs])),
                       "lat": float(max(r[1] for r in runs))}
     return out
@@ -118,7 +120,33 @@ def rank_key(row: dict) -> tuple:
     return (row["targets met"], row["crossings"], -row["slope TR mean"])
 
 
+VALIDATION_FILE = "validation.json"  # a candidate's results, kept in its checkpoint folder
+
+
+def _courses_key(courses) -> list:
+    """The validation courses as JSON (a cached result counts only for the same courses)."""
+    return json.loads(json.dumps([list(c) for c in courses]))
+
+
+def _cached(path: str, courses) -> dict | None:
+    """The results saved by an earlier selection over the same courses, else None (a file that
+    cannot be read is ignored: the candidate is evaluated again and the file rewritten)."""
+    try:
+        with open(os.path.join(path, VALIDATION_FILE)) as fh:
+            saved = json.load(fh)
+        if saved["courses"] == _courses_key(courses):
+            return saved["results"]
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    return None
+
+
 def _candidate(path: str, courses) -> dict:
+    """One candidate's validation results: from its folder's ``validation.json`` when an earlier
+    selection ran the same courses (a killed selection resumes there), else by running them."""
+    res = _cached(path, courses)
+    if res is not None:
+        return {"path": path, "results": res, "seconds": 0.0, "cached": True}
     import torch
 
     from .checkpoints import agent_from_checkpoint, load_checkpoint
@@ -127,7 +155,11 @@ def _candidate(path: str, courses) -> dict:
     agent = agent_from_checkpoint(load_checkpoint(path, with_buffer=False))
     t0 = time.perf_counter()
     res = course_results(lambda obs, env=None: agent.act(obs), courses)
-    return {"path": path, "results": res, "seconds": time.perf_counter() - t0}
+    tmp = os.path.join(path, VALIDATION_FILE + ".tmp")
+    with open(tmp, "w") as fh:
+        json.dump({"courses": _courses_key(courses), "results": res}, fh, indent=1)
+    os.replace(tmp, os.path.join(path, VALIDATION_FILE))
+    return {"path": path, "results": res, "seconds": time.perf_counter() - t0, "cached": False}
 
 
 def candidates(dirs: list[str]) -> list[str]:
@@ -171,7 +203,8 @@ def select_policy(dirs: list[str], sel: dict, out: str, log=print) -> str:
                     row[f"{label} lateral [m]"] = v["lat"]
             rows.append(row)
             log(f"  {row['candidate']}: {row['targets met']} targets met, step "
-                f"{res['step']['crossed']:.2f}, trap {res['trap']['crossed']:.2f}, "
+                f"{res['step']['crossed']:.2f}, trap {res['trap']['crossed']:.2f}"
+                f"{' (saved results)' if r['cached'] else ''}, "
                 f"{len(rows)}/{len(paths)}, {time.perf_counter() - t0:.0f} s")
     best = max(rows, key=rank_key)
     crawl_row = {"candidate": "crawling gait (reference)"}
