@@ -58,8 +58,10 @@ void ElevationMap::clear_col(std::int64_t gj) {
 }
 
 void ElevationMap::move_to(double x, double y) {
-  require_finite("ElevationMap.move_to", "x", x);
-  require_finite("ElevationMap.move_to", "y", y);
+  // Cell indices are int64 counts of cells from the world origin: beyond 1e8 m (five times the
+  // circumference of Mars) they would lose cells to rounding and then overflow.
+  require_in_range("ElevationMap.move_to", "x", x, -1e8, 1e8);
+  require_in_range("ElevationMap.move_to", "y", y, -1e8, 1e8);
   const double res = options_.resolution;
   const auto gi0 = static_cast<std::int64_t>(std::floor(x / res)) - n_ / 2;
   const auto gj0 = static_cast<std::int64_t>(std::floor(y / res)) - n_ / 2;

@@ -87,6 +87,16 @@ void WalkerSimOptions::validate() const {
 
 double wheel_rock_clearance(const Vec3& centre, const Vec3& axle, double radius, double width,
                             const Rock& rock) {
+  // FCL asserts (aborting the process) on non-finite or degenerate shapes: refuse them here.
+  const char* o = "wheel_rock_clearance";
+  for (int k = 0; k < 3; ++k) {
+    require_finite(o, "centre", centre[k]);
+    require_finite(o, "axle", axle[k]);
+  }
+  require(axle.norm() > 1e-12, "wheel_rock_clearance: axle must be a non-zero vector");
+  require_in_range(o, "radius", radius, 1e-4, 100.0);
+  require_in_range(o, "width", width, 1e-4, 100.0);
+  rock.validate();
   // FCL cylinders lie along their local z axis, centred at the origin.
   const fcl::Cylinderd wheel(radius, width);
   fcl::Transform3d tw = fcl::Transform3d::Identity();

@@ -522,6 +522,10 @@ TEST(PerceptionMap, BadInputIsSkippedOrRejected) {
   EXPECT_NE(invalid_argument_message([&] { map.fuse_cloud(p, bad, cam); }), "");
   EXPECT_NE(invalid_argument_message([&] { map.move_to(std::nan(""), 0); }).find("x = nan"),
             std::string::npos);
+  // beyond 1e8 m the int64 cell indices would round and then overflow: refused, not wrapped
+  EXPECT_NE(invalid_argument_message([&] { map.move_to(1e17, 0); }).find("x = 1e+17"),
+            std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { map.move_to(0, -1e18); }).find("y"), std::string::npos);
   // never a NaN height with a finite variance
   EXPECT_TRUE(map.consistent());
   ElevationMapOptions o;

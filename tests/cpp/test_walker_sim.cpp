@@ -62,6 +62,24 @@ TEST(WalkerSim, WheelRockClearanceMatchesTheClosedForm) {
   EXPECT_NEAR(wheel_ground_clearance(c, axle, 0.35), 0.15, 1e-12);
   r.half_extents.y() = -0.1;
   EXPECT_NE(invalid_argument_message([&] { r.validate(); }).find("half_extents"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { wheel_rock_clearance(c, axle, 0.35, 0.25, r); })
+                .find("half_extents"), std::string::npos);
+  r.half_extents.y() = 0.3;
+  // FCL would assert (abort) on these: each is refused with the argument's name
+  const double nan = std::nan("");
+  EXPECT_NE(invalid_argument_message([&] { wheel_rock_clearance(c, axle, 0.35, nan, r); })
+                .find("width"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { wheel_rock_clearance(c, axle, nan, 0.25, r); })
+                .find("radius"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { wheel_rock_clearance(Eigen::Vector3d(nan, 0, 0), axle, 0.35, 0.25, r); })
+                .find("centre"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { wheel_rock_clearance(c, Eigen::Vector3d(0, nan, 0), 0.35, 0.25, r); })
+                .find("axle"), std::string::npos);
+  EXPECT_NE(invalid_argument_message([&] { wheel_rock_clearance(c, Eigen::Vector3d::Zero(), 0.35, 0.25, r); })
+                .find("axle"), std::string::npos);
+  r.centre.x() = nan;
+  EXPECT_NE(invalid_argument_message([&] { wheel_rock_clearance(c, axle, 0.35, 0.25, r); })
+                .find("centre"), std::string::npos);
 }
 
 TEST(WalkerSim, SagCompensatedSwingClearsTheRockTheRigidPlanHits) {

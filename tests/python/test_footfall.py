@@ -145,3 +145,20 @@ def test_cycle_that_cannot_start_writes_maps_and_no_gif(tmp_path):
     with pytest.raises(ValueError, match="flat_tolerance"):
         footfall_cycle.demo(tmp_path, cell=0.08, rocks=5, variants=False, log=lambda *_: None,
                             flat_tolerance=-0.01)
+
+
+def test_wheel_rock_clearance_refuses_what_fcl_would_abort_on():
+    from ernest_cpp import walker_sim as WS
+
+    r = WS.Rock()
+    r.centre = np.array([3.0, 0.0, 0.05])
+    r.half_extents = np.array([0.1, 0.1, 0.1])
+    centre, axle = np.array([2.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    assert WS.wheel_rock_clearance(centre, axle, 0.5, 0.3, r) > 0.0
+    nan = float("nan")
+    for args, name in (((centre, axle, 0.5, nan, r), "width"), ((centre, axle, nan, 0.3, r), "radius"),
+                       ((np.array([nan, 0, 0]), axle, 0.5, 0.3, r), "centre"),
+                       ((centre, np.array([0, nan, 0]), 0.5, 0.3, r), "axle"),
+                       ((centre, np.zeros(3), 0.5, 0.3, r), "axle")):
+        with pytest.raises(ValueError, match=name):
+            WS.wheel_rock_clearance(*args)

@@ -177,3 +177,12 @@ def test_perception_command_writes_views(tmp_path, capsys):
     rms = [float(line.split(",")[3]) for line in lines[1:]]
     assert all(0.0 < r < 0.05 for r in rms)
     assert "RMS" in capsys.readouterr().out
+
+
+def test_elevation_map_refuses_a_move_its_cell_indices_cannot_hold():
+    em = P.ElevationMap()
+    em.fuse_points(np.array([[0.0, 0.0, 0.0]]), np.array([1e-4]))
+    em.move_to(1e6, 0.0)  # far but representable: the window simply moves
+    for x, y in ((1e17, 0.0), (0.0, -1e18), (math.inf, 0.0)):
+        with pytest.raises(ValueError, match="move_to"):
+            em.move_to(x, y)
