@@ -15,32 +15,57 @@ from .replay import ReplayBuffer
 from .storage import CorruptFileError, read_manifest
 from .td3 import TD3, TD3Config
 
+STEP_DIR = re.compile(r"^step-\d+$")
+
 
 def find_checkpoint(path: str) -> str:
-    """A checkpoint folder from a run folder (its latest), a checkpoints folder, or itself."""
+    """A checkpoint folder from a run folder (its latest), a checkpoints folder, or itself.
+
+    The latest is the one ``LATEST`` names; when ``LATEST`` is missing, empty, or does not name a
+    ``step-N`` folder that exists, it is the newest ``step-N`` folder that verifies."""
     if os.path.isfile(os.path.join(path, "manifest.json")):
         return path
     for base in (os.path.join(path, "checkpoints"), path):
         latest = os.path.join(base, "LATEST")
+        name = ""
         if os.path.isfile(latest):
-            with open(latest) as fh:
-                name = fh.read().strip()
-            return os.path.join(base, name)
+            try:
+                with open(latest, errors="replace") as fh:
+                    name = fh.read(256).strip()
+            except OSError:
+                name = ""
+            if STEP_DIR.match(name) and os.path.isdir(os.path.join(base, name)):
+                return os.path.join(base, name)
+        good = newest_good_checkpoint(base)
+        if good is not None:
+            return good
+        steps = _step_dirs(base)
+        if steps:  # step-N folders, none of them intact: say why the newest is not
+            try:
+                read_manifest(os.path.join(base, steps[0]), "checkpoint", verify=True)
+            except CorruptFileError as exc:
+                raise CorruptFileError(f"{path}: no intact checkpoint among the {len(steps)} "
+                                       f"step-N folders of {base} (the newest: {exc})") from None
+        if os.path.isfile(latest):
+            raise CorruptFileError(f"{latest}: names {name[:80]!r}, not a step-N checkpoint folder "
+                                   f"beside it, and there is no intact one to fall back on")
     raise CorruptFileError(f"{path}: no checkpoint found (neither a checkpoint folder nor a run "
-                           f"folder with checkpoints/LATEST)")
+                           f"folder with checkpoints/LATEST or an intact checkpoints/step-N)")
 
 
-STEP_DIR = re.compile(r"^step-\d+$")
+def _step_dirs(ck_root: str) -> list[str]:
+    """The ``step-N`` folder names of ``ck_root``, newest first (none if it cannot be read)."""
+    try:
+        return sorted((d for d in os.listdir(ck_root) if STEP_DIR.match(d) and
+                       os.path.isdir(os.path.join(ck_root, d))),
+                      key=lambda d: int(d[5:]), reverse=True)
+    except OSError:
+        return []
 
 
 def newest_good_checkpoint(ck_root: str, exclude: str = "") -> str | None:
     """The newest ``step-N`` folder of ``ck_root`` (other than ``exclude``) that verifies."""
-    try:
-        names = sorted((d for d in os.listdir(ck_root) if STEP_DIR.match(d)),
-                       key=lambda d: int(d[5:]), reverse=True)
-    except OSError:
-        return None
-    for d in names:
+    for d in _step_dirs(ck_root):
         p = os.path.join(ck_root, d)
         if os.path.abspath(p) == os.path.abspath(exclude):
             continue
@@ -85,6 +110,73 @@ def _read_checkpoint(ck: str, with_buffer: bool) -> dict:
     if with_buffer and os.path.isdir(os.path.join(ck, "buffer")):
         out["buffer"] = ReplayBuffer.load(os.path.join(ck, "buffer"), verify=False)
     return out
+
+
+# Settings a resumed run may change without ``override``: how long it runs, what it logs, how many
+# checkpoints it keeps, where its Ray cluster is, and the consolidation's settings (which training
+# does not read). None of them changes what the run learns.
+RESUME_FREE = ("total_steps", "log", "checkpoint.keep", "ray.address", "ray.object_store_mb",
+               "consolidate")
+_UNSET = object()
+
+
+def saved_settings(saved: dict) -> dict:
+    """A run's saved settings completed with those newer than the run (ray, learner_device,
+    demos): the quick preset's values; a run from before learner_device learned on the CPU."""
+    from .config import load_preset
+
+    cfg = dict(saved)
+    newer = {k: v for k, v in load_preset("quick").items() if k not in cfg}
+    if "learner_device" in newer:
+        newer["learner_device"] = "cpu"
+    cfg.update(newer)
+    return cfg
+
+
+def config_changes(saved: dict, cfg: dict) -> list[str]:
+    """``key: saved -> new`` for every setting of ``cfg`` that differs from a run's ``saved``
+    ones, other than those in RESUME_FREE. A preset setting newer than the run (absent from
+    ``saved``, or from both) counts with its quick-preset value (see saved_settings)."""
+    from .config import load_preset
+
+    def free(key: str) -> bool:
+        return any(key == f or key.startswith(f + ".") for f in RESUME_FREE)
+
+    def show(v) -> str:
+        return "(not set)" if v is _UNSET else json.dumps(v, default=str)
+
+    out: list[str] = []
+
+    def walk(a, b, ref, prefix: str) -> None:
+        for k in sorted(set(a) | set(b), key=str):
+            key = f"{prefix}{k}"
+            if free(key):
+                continue
+            va, vb = a.get(k, _UNSET), b.get(k, _UNSET)
+            if isinstance(ref, dict) and k in ref:  # a setting newer than the run: its default
+                va = ref[k] if va is _UNSET else va
+                vb = ref[k] if vb is _UNSET else vb
+            if isinstance(va, dict) and isinstance(vb, dict):
+                walk(va, vb, ref.get(k) if isinstance(ref, dict) else None, key + ".")
+            elif va != vb:
+                out.append(f"{key}: {show(va)} -> {show(vb)}")
+
+    walk(saved_settings(saved), cfg, load_preset("quick"), "")
+    return out
+
+
+def check_resume_config(saved: dict, cfg: dict, where: str, override: bool = False) -> list[str]:
+    """Refuse (ValueError) to resume the run saved in ``where`` with settings other than its own,
+    unless ``override``; returns the changes (those RESUME_FREE leaves out)."""
+    changes = config_changes(saved, cfg)
+    if changes and not override:
+        raise ValueError(
+            f"{where}: these settings differ from the ones the run was trained with: "
+            f"{'; '.join(changes)}. A resumed run continues with its saved settings (only "
+            f"{', '.join(RESUME_FREE)} may change); pass --override-config (Trainer: "
+            f"override_config=True) to continue it with the new ones, or train a new run in "
+            f"another --run-dir")
+    return changes
 
 
 def agent_from_checkpoint(ck: dict) -> TD3:

@@ -77,31 +77,28 @@ def _train(args) -> int:
     if args.resume:
         # The run's saved settings, changed only by what this command line gives explicitly.
         from .config import merge, parse_assignment
-        from .checkpoints import load_checkpoint
+        from .checkpoints import load_checkpoint, saved_settings
 
         if not args.run_dir:
             raise ValueError("--resume needs --run-dir")
         if args.config:
             raise ValueError("--resume continues with the run's saved settings; use --set to "
                              "change one")
-        state = load_checkpoint(args.run_dir, with_buffer=False)["state"]
-        cfg = state["config"]
+        ck = load_checkpoint(args.run_dir, with_buffer=False)
+        state = ck["state"]
         if args.steps is not None and args.steps <= state["step"]:
             raise ValueError(f"--steps {args.steps}: the run in {args.run_dir} has done "
                              f"{state['step']} transitions already; give more to continue")
-        from .config import load_preset
-
         # Settings newer than the run (ray, learner_device, demos) get the quick preset's values,
         # which --set may then change; a run from before learner_device learned on the CPU.
-        newer = {k: v for k, v in load_preset("quick").items() if k not in cfg}
-        if "learner_device" in newer:
-            newer["learner_device"] = "cpu"
-        cfg.update(newer)
+        cfg = saved_settings(state["config"])
         if extra:
             cfg = merge(cfg, extra)
         for o in args.set:
             cfg = merge(cfg, parse_assignment(o))
     else:
+        if args.override_config:
+            raise ValueError("--override-config applies to --resume only")
         cfg = _build(args, extra)
     if args.backend == "ray":  # the simulations are the workers' (env.num_envs follows)
         from .config import merge
@@ -110,17 +107,21 @@ def _train(args) -> int:
                                   cfg["ray"]["envs_per_worker"]}})
     if args.print_config:
         return _print_config(cfg)
+    if args.resume:  # refused here, before any simulation starts (the trainer checks too)
+        from .checkpoints import check_resume_config
+
+        check_resume_config(state["config"], cfg, ck["path"], args.override_config)
     env_id = resolve_env_id(cfg["env"])
     run_dir = args.run_dir or os.path.join(
         "runs", f"{re.sub(r'[^A-Za-z0-9_.-]+', '_', env_id)}-seed{cfg['seed']}")
     if args.backend == "ray":
         from .ray_trainer import RayTrainer
 
-        tr = RayTrainer(cfg, run_dir, resume=args.resume)
+        tr = RayTrainer(cfg, run_dir, resume=args.resume, override_config=args.override_config)
         where = (f"{tr.rc['num_workers']} Ray workers x {tr.rc['envs_per_worker']}, "
                  f"{tr.rc['mode']} mode, ")
     else:
-        tr = Trainer(cfg, run_dir, resume=args.resume)
+        tr = Trainer(cfg, run_dir, resume=args.resume, override_config=args.override_config)
         where = ""
     print(f"training on {env_id} ({where}{tr.n} simulations, obs {tr.obs_dim}, act {tr.act_dim}, layout "
           f"{tr.layout.version}, FTS noise on {tr.buffer.noise_idx.size} components) -> {run_dir}")
@@ -196,7 +197,15 @@ def add_parser(subparsers) -> None:
                    help="ERNEST training scenario (env id ernest/<Scenario>-v0)")
     _settings_args(p)
     p.add_argument("--run-dir", help="output folder (default runs/<env>-seed<seed>)")
-    p.add_argument("--resume", action="store_true", help="continue the run in --run-dir exactly")
+    p.add_argument("--resume", action="store_true", help="continue the run in --run-dir exactly, "
+                   "with its saved settings (config.yaml); --steps, --set log.*, "
+                   "checkpoint.keep, ray.address, ray.object_store_mb and consolidate.* may "
+                   "differ, other changes are refused without --override-config. The checkpoint is the one checkpoints/LATEST names, or "
+                   "the newest intact checkpoints/step-N when LATEST is missing or damaged")
+    p.add_argument("--override-config", action="store_true",
+                   help="with --resume: continue with the settings this command line gives "
+                   "(e.g. another --seed) where they differ from the run's saved ones, and "
+                   "rewrite config.yaml")
     p.add_argument("--steps", type=_positive_int,
                    help="total transitions to collect (total_steps, at least 1)")
     p.add_argument("--seed", type=int)

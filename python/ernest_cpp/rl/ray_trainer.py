@@ -52,10 +52,11 @@ def ray_settings(cfg: dict) -> dict:
 
 
 class RayTrainer(Trainer):
-    def __init__(self, cfg: dict, run_dir: str, resume: bool = False, log=print):
+    def __init__(self, cfg: dict, run_dir: str, resume: bool = False, log=print,
+                 override_config: bool = False):
         self.rc = ray_settings(cfg)
         connect(self.rc["address"], self.rc["object_store_mb"])
-        super().__init__(cfg, run_dir, resume, log)
+        super().__init__(cfg, run_dir, resume, log, override_config)
 
     def _learner_device(self) -> str:
         import torch

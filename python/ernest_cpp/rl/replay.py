@@ -154,7 +154,8 @@ class ReplayBuffer:
     @classmethod
     def load(cls, path: str, capacity: int | None = None, verify: bool = True) -> "ReplayBuffer":
         """Load a saved buffer. ``capacity`` (default: the saved one) may differ; if it is smaller
-        than the stored size, the most recent transitions are kept."""
+        than the stored size, the most recent transitions are kept. A chunk holding a NaN or an
+        infinity is refused (CorruptFileError naming the chunk file), checksums or not."""
         man = read_manifest(path, "replay_buffer", verify)
         m = man.get("meta", {})
         try:
@@ -178,6 +179,18 @@ class ReplayBuffer:
                     raise CorruptFileError(f"{p}: chunk missing") from None
                 except ValueError as exc:
                     raise CorruptFileError(f"{p}: unreadable chunk ({exc})") from None
+                if parts[-1].dtype.kind not in "fiub":
+                    raise CorruptFileError(f"{p}: holds {parts[-1].dtype} values, expected "
+                                           f"numbers")
+                bad = ~np.isfinite(parts[-1])
+                if bad.any():  # NaN/inf would poison every update that samples it
+                    at = np.argwhere(bad)[0]
+                    row = c * cr + int(at[0])
+                    raise CorruptFileError(
+                        f"{p}: non-finite {f} value {float(parts[-1][tuple(at)])} at stored row "
+                        f"{row}{f', component {int(at[1])}' if at.size > 1 else ''} "
+                        f"({int(bad.sum())} non-finite values in this chunk); a replay buffer "
+                        f"must hold finite values only")
             arr = np.concatenate(parts) if parts else np.zeros((0,))
             width = {"obs": buf.obs_dim, "next_obs": buf.obs_dim, "act": buf.act_dim}.get(f)
             expected = (size, width) if width else (size,)

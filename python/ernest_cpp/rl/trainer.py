@@ -25,7 +25,7 @@ import numpy as np
 import torch
 import yaml
 
-from .checkpoints import STEP_DIR, load_checkpoint
+from .checkpoints import STEP_DIR, check_resume_config, load_checkpoint
 from .envs_util import (autoreset_mode, check_spaces, env_layout, evaluate, make_env,
                         make_vector_env, noise_for, resolve_env_id, step_transitions, to_env_action)
 from . import demos
@@ -44,8 +44,14 @@ def _set_rng_state(rng: np.random.Generator, state: dict) -> None:
 
 
 class Trainer:
-    def __init__(self, cfg: dict, run_dir: str, resume: bool = False, log=print):
+    """``resume``: continue the run saved in ``run_dir``. ``cfg`` must then be the run's saved
+    settings, changed at most in those checkpoints.RESUME_FREE lists (the length of the run,
+    logging, checkpoints kept); other changes are refused unless ``override_config``."""
+
+    def __init__(self, cfg: dict, run_dir: str, resume: bool = False, log=print,
+                 override_config: bool = False):
         self.cfg, self.run_dir, self.log = cfg, run_dir, log
+        self.override_config = bool(override_config)
         self.eval_env = self.vec = None
         try:
             self._setup(resume)
@@ -165,6 +171,11 @@ class Trainer:
         clean_stale(os.path.join(self.run_dir, "checkpoints"))
         ck = load_checkpoint(self.run_dir)
         st = ck["state"]
+        changed = check_resume_config(st["config"], self.cfg, ck["path"],
+                                      self.override_config) if "config" in st else []
+        if changed:
+            self.log(f"resuming {ck['path']} with changed settings (--override-config): "
+                     f"{'; '.join(changed)}")
         if st["env_id"] != self.env_id or st["obs_dim"] != self.obs_dim or \
                 st["act_dim"] != self.act_dim:
             raise ValueError(f"checkpoint {ck['path']} was made on {st['env_id']} "
