@@ -109,6 +109,40 @@ def test_pipeline_selects_among_kept_agents_on_validation_episodes(tmp_path):
     assert json.load(open(broken))["results"]["step"]["crossed"] is not None
 
 
+def test_pipeline_refines_the_chosen_agent_and_chooses_again(tmp_path):
+    cons = {"seeds": [0], "set": ["consolidate.iterations=20", "consolidate.hidden=16",
+                                  "consolidate.eval_episodes=1", "consolidate.batch_size=16"]}
+    refine = {"set": ["consolidate.w_delta=1.0", "consolidate.lr=1e-4",
+                      "consolidate.iterations=20", "consolidate.keep_every=10",
+                      "consolidate.keep_from=10"]}
+    cfg = P.load_pipeline(_pipeline(tmp_path, consolidate=cons, refine=refine,
+                                    select={"seeds": [10, 11], "slopes_deg": [18]}))
+    lines: list[str] = []
+    P.run_pipeline(cfg, stages=("specialists", "consolidate", "select", "export"),
+                   log=lines.append)
+    out = cfg["out"]
+    first = json.load(open(os.path.join(out, "selected.json")))["checkpoint"]
+    assert first == os.path.join(out, "consolidated", "checkpoints", "consolidated")
+    log = open(os.path.join(out, "refined.log")).read()
+    assert f"continuing {first}" in log and "rewards relabelled to w_delta = 1" in log
+    rows = list(csv.DictReader(open(os.path.join(out, "refined", "selection.csv"))))
+    assert [r["candidate"] for r in rows[:-1]] == [
+        os.path.join("..", "consolidated", "checkpoints", "consolidated"),  # the first choice
+        os.path.join("checkpoints", "iteration-00000010"), os.path.join("checkpoints", "consolidated")]
+    best = max(rows[:-1], key=lambda r: (int(r["targets met"]), float(r["crossings"]),
+                                         -float(r["slope TR mean"])))
+    chosen = json.load(open(os.path.join(out, "refined", "selected.json")))["checkpoint"]
+    assert chosen == os.path.normpath(os.path.join(out, "refined", best["candidate"]))
+    assert any("[4/6] export " + chosen in ln for ln in lines)
+    again: list[str] = []
+    P.run_pipeline(cfg, stages=("select",), log=again.append)
+    assert "[3/6] select: done" in again and "      refine: done" in again
+    with pytest.raises(ValueError, match="refine needs a select section"):
+        P.load_pipeline(_pipeline(tmp_path, refine=refine))
+    with pytest.raises(ValueError, match="pipeline refine"):
+        P.load_pipeline(_pipeline(tmp_path, refine={"sett": []}, select={}))
+
+
 def test_pipeline_resumes_an_interrupted_specialist(tmp_path):
     cfg = P.load_pipeline(_pipeline(tmp_path))
     cfg["specialists"] = {"step": cfg["specialists"]["step"]}

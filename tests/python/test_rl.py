@@ -18,7 +18,8 @@ torch.set_num_threads(1)
 from ernest_cpp import cli  # noqa: E402
 from ernest_cpp.rl import config as C  # noqa: E402
 from ernest_cpp.rl import layout as L  # noqa: E402
-from ernest_cpp.rl.consolidate import consolidate_runs, pool_buffers, train_on_buffer  # noqa: E402
+from ernest_cpp.rl.consolidate import (consolidate_runs, pool_buffers, relabel_lateral,  # noqa: E402
+                                       train_on_buffer)
 from ernest_cpp.rl.exploration import GaussianExploration, MarkovExploration  # noqa: E402
 from ernest_cpp.rl.export import ExportError, export_actor, load_policy  # noqa: E402
 from ernest_cpp.rl.networks import Actor, TwinCritic  # noqa: E402
@@ -535,6 +536,65 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
     assert "unknown setting 'td3.batchsize'" in capsys.readouterr().err
     assert scenario_env_id("slope") == "ernest/Slope-v0"
     assert json.loads(json.dumps(C.parse_assignment("a.b=[1, 2]"))) == {"a": {"b": [1, 2]}}
+
+
+def test_relabelling_the_lateral_weight_is_exact_and_touches_only_the_reward():
+    lay = L.paper_layout()
+    i = lay.names.index("lateral_deviation")
+    buf = _filled_buffer(n=300, cap=400)
+    before = {f: getattr(buf, f).copy() for f in ("obs", "act", "rew", "next_obs", "done")}
+    relabel_lateral(buf, i, lay.scale[i], 0.1, 0.5)
+    delta = before["next_obs"][:300, i].astype(np.float64) * lay.scale[i]  # eq 37's delta [m]
+    np.testing.assert_allclose(buf.rew[:300], before["rew"][:300] - 0.4 * delta ** 2, rtol=1e-6,
+                               atol=1e-5)
+    assert np.all(buf.rew[300:] == 0.0)  # the empty slots stay empty
+    for f in ("obs", "act", "next_obs", "done"):
+        np.testing.assert_array_equal(getattr(buf, f), before[f])
+    # pool_buffers hands each source's part to the relabelling, not the source itself
+    src = _filled_buffer(n=300, cap=300)
+    seen = []
+    pool = pool_buffers([src], 200, relabel=lambda k, part: seen.append((k, len(part))))
+    assert seen == [(0, 200)] and len(pool) == 200
+
+
+def test_consolidation_continues_a_given_agent_on_relabelled_rewards(tmp_path, capsys):
+    run, cons = str(tmp_path / "run"), str(tmp_path / "cons")
+    assert cli.main(["train", "--env", POINT_MASS, "--run-dir", run, "--steps", "300",
+                     "--set", "env.kwargs={obs_dim: 45, act_dim: 3}", "--set", "td3.hidden=32",
+                     "--set", "log.progress_bar=false", "--set", "eval.every_steps=0",
+                     "--set", "random_steps=100", "--set", "learning_starts=100",
+                     "--set", "checkpoint.every_steps=300"]) == 0
+    small = ["--set", "consolidate.hidden=16", "--set", "log.progress_bar=false", "--no-eval"]
+    assert cli.main(["consolidate", run, "--out", cons, "--set", "consolidate.iterations=20"]
+                    + small) == 0
+    first = load_checkpoint(cons, with_buffer=False)
+    capsys.readouterr()
+    # one update at a vanishing learning rate: the continued actor is the given one
+    more = str(tmp_path / "more")
+    assert cli.main(["consolidate", run, "--out", more, "--set", "consolidate.iterations=1",
+                     "--set", f"consolidate.init={first['path']}", "--set", "consolidate.lr=1e-12",
+                     "--set", "consolidate.w_delta=0.5"] + small) == 0
+    out = capsys.readouterr().out
+    assert "continuing" in out and "rewards relabelled to w_delta = 0.5" in out
+    cont = load_checkpoint(more, with_buffer=False)
+    for k, v in first["agent"]["actor"].items():
+        torch.testing.assert_close(cont["agent"]["actor"][k], v, atol=1e-9, rtol=0)
+    assert cont["state"]["td3"]["actor_lr"] == 1e-12
+    # a fresh agent (no init) is not the given one
+    fresh = str(tmp_path / "fresh")
+    assert cli.main(["consolidate", run, "--out", fresh, "--set", "consolidate.iterations=1",
+                     "--set", "seed=5"] + small) == 0
+    w = load_checkpoint(fresh, with_buffer=False)["agent"]["actor"]
+    assert any(not torch.equal(w[k], v) for k, v in first["agent"]["actor"].items())
+    capsys.readouterr()
+    # refused: a weight out of range, an agent of another width
+    assert cli.main(["consolidate", run, "--out", str(tmp_path / "bad"), "--set",
+                     "consolidate.w_delta=-1"] + small) == 2
+    assert "consolidate.w_delta" in capsys.readouterr().err
+    assert cli.main(["consolidate", run, "--out", str(tmp_path / "bad2"), "--set",
+                     f"consolidate.init={first['path']}", "--set", "consolidate.hidden=32",
+                     "--set", "log.progress_bar=false", "--no-eval"]) == 2
+    assert "consolidate.init" in capsys.readouterr().err
 
 
 # ----------------------------------------------------------------------------------- rover env

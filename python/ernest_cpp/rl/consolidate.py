@@ -26,12 +26,29 @@ from .checkpoints import agent_from_checkpoint, find_checkpoint, load_checkpoint
 from .envs_util import evaluate, make_env, noise_for
 
 
-def pool_buffers(sources: list, per_run: int, capacity: int | None = None) -> ReplayBuffer:
-    """Most recent ``per_run`` transitions of each buffer (ReplayBuffer or saved folder), pooled."""
+DEFAULT_W_DELTA = 0.1  # eq 38's lateral weight (sensing.RewardWeights' default)
+
+
+def relabel_lateral(buf: ReplayBuffer, index: int, scale: float, w_from: float,
+                    w_to: float) -> None:
+    """Re-weights eq 38's lateral term of every stored reward from ``w_from`` to ``w_to``, exactly:
+    δ is the stored next observation's ``lateral_deviation`` (entry ``index``, normalised by
+    ``scale``, never clipped), and the other terms do not depend on the weight."""
+    n = buf.size
+    d = buf.next_obs[:n, index].astype(np.float64) * float(scale)
+    buf.rew[:n] -= ((float(w_to) - float(w_from)) * d * d).astype(np.float32)
+
+
+def pool_buffers(sources: list, per_run: int, capacity: int | None = None,
+                 relabel=None) -> ReplayBuffer:
+    """Most recent ``per_run`` transitions of each buffer (ReplayBuffer or saved folder), pooled.
+    ``relabel(i, part)``, if given, may change source i's part in place before pooling."""
     parts = []
-    for s in sources:
+    for i, s in enumerate(sources):
         buf = s if isinstance(s, ReplayBuffer) else ReplayBuffer.load(s)
         parts.append(buf.last_n(per_run))
+        if relabel is not None:
+            relabel(i, parts[-1])
     total = sum(len(p) for p in parts)
     if capacity is not None and total > capacity:
         raise ValueError(f"consolidate: pooled {total} transitions exceed buffer_size {capacity}")
@@ -39,11 +56,19 @@ def pool_buffers(sources: list, per_run: int, capacity: int | None = None) -> Re
 
 
 def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, seed: int = 0,
-                    progress=None, device: str = "cpu", snapshot=None) -> tuple[TD3, dict]:
-    """Fresh TD3 trained for ``iterations`` updates on ``buffer`` alone (no environment), its
-    networks on ``device`` (a torch device, e.g. ``resolve_device("auto")``). ``snapshot(done,
-    agent)``, if given, is called after every update (it decides whether to keep the agent)."""
+                    progress=None, device: str = "cpu", snapshot=None,
+                    init: dict | None = None) -> tuple[TD3, dict]:
+    """TD3 trained for ``iterations`` updates on ``buffer`` alone (no environment), its
+    networks on ``device`` (a torch device, e.g. ``resolve_device("auto")``): fresh (§4.6), or
+    continued from ``init`` (a ``TD3.state_dict()``; networks, targets and Adam moments, at
+    ``td3_cfg``'s learning rates). ``snapshot(done, agent)``, if given, is called after every
+    update (it decides whether to keep the agent)."""
     agent = TD3(buffer.obs_dim, buffer.act_dim, td3_cfg, seed=seed, device=device)
+    if init is not None:
+        agent.load_state_dict(init)
+        for opt, lr in ((agent.actor_opt, td3_cfg.actor_lr), (agent.critic_opt, td3_cfg.critic_lr)):
+            for g in opt.param_groups:
+                g["lr"] = lr
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0xC0]))
     losses, t0 = [], time.perf_counter()
     for it in range(int(iterations)):
@@ -97,17 +122,41 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
     if len(dims) != 1:
         raise ValueError(f"consolidate: runs have different observation/action sizes {dims}")
     lay = L.ObservationLayout.from_dict(specialists[0]["state"]["layout"])
+    w_to = c.get("w_delta")
+    relabel = None
+    if w_to is not None:
+        if isinstance(w_to, bool) or not isinstance(w_to, (int, float)) or not 0 <= w_to < 1e3:
+            raise ValueError(f"consolidate.w_delta = {w_to!r} must be null (rewards as stored) or "
+                             f"a weight in [0, 1000) [1/m^2]")
+        lat = lay.names.index("lateral_deviation")
+
+        def relabel(i, part):  # each specialist's own eq 38 weight -> w_delta
+            kw = (specialists[i]["state"]["config"].get("env") or {}).get("kwargs") or {}
+            w_from = (kw.get("reward") or {}).get("w_delta", DEFAULT_W_DELTA)
+            relabel_lateral(part, lat, lay.scale[lat], w_from, w_to)
     pool = pool_buffers([s["buffer"] for s in specialists], int(c["per_run"]),
-                        int(c["buffer_size"]))
+                        int(c["buffer_size"]), relabel)
     for s in specialists:  # the pool holds what is needed; free the full buffers
         s.pop("buffer", None)
     pool.set_noise(*noise_for(cfg["noise"], lay))
     log(f"  pooled {len(pool)} transitions (capacity {pool.capacity}); noise on "
-        f"{pool.noise_idx.size} components")
+        f"{pool.noise_idx.size} components"
+        + (f"; rewards relabelled to w_delta = {w_to:g}" if w_to is not None else ""))
     base = dict(specialists[0]["state"]["td3"])
     base.update(batch_size=int(c["batch_size"]), actor_lr=float(c["lr"]),
                 critic_lr=float(c["lr"]), hidden=int(c["hidden"]))
     td3_cfg = TD3Config(**base).validate()
+    init = None
+    if c.get("init"):  # continue a consolidated agent instead of a fresh one
+        ck = load_checkpoint(str(c["init"]), with_buffer=False)
+        st = ck["state"]
+        if (st["obs_dim"], st["act_dim"], st["td3"]["hidden"]) != (pool.obs_dim, pool.act_dim,
+                                                                    td3_cfg.hidden):
+            raise ValueError(f"consolidate.init = {c['init']}: networks (obs, act, hidden) = "
+                             f"{(st['obs_dim'], st['act_dim'], st['td3']['hidden'])}, the pool "
+                             f"and consolidate.hidden need {(pool.obs_dim, pool.act_dim, td3_cfg.hidden)}")
+        init = ck["agent"]
+        log(f"  continuing {ck['path']} at lr {td3_cfg.actor_lr:g}")
     bar = None
     if cfg["log"]["progress_bar"]:
         from tqdm import tqdm
@@ -139,7 +188,7 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
                          state_of(agent, info))
 
     agent, info = train_on_buffer(pool, td3_cfg, total, int(cfg["seed"]), progress, device,
-                                  snapshot if every else None)
+                                  snapshot if every else None, init)
     if bar:
         bar.close()
     log(f"  {info['iterations']} iterations in {info['seconds']:.1f} s on {device}")

@@ -14,6 +14,10 @@ kill resumes where it stopped:
 3. **select**: every kept agent on validation episodes the reports never use
    (``ernest_cpp.rl.selection``); the best is the policy, and its table against every specialist
    on every scenario is written beside it. Without a ``select`` section: seed 0's final agent.
+   With a ``refine`` section, the chosen agent is then continued on the same pool (``ernest
+   consolidate`` with ``consolidate.init``, the consolidation's settings and then ``refine.set``,
+   e.g. a relabelled lateral weight and a lower learning rate), its kept agents and the chosen one are judged on the same
+   validation episodes, and the best of them is the policy (``out/refined``).
 4. **export**: TorchScript export and weights checksum, written to the policy path atomically.
 5. **evaluate**: ``ernest reproduce`` with the new policy over ``evaluate.seeds`` seeds.
 6. **report**: learning curves against wall time (``curves.png``) and ``training.md``.
@@ -38,7 +42,7 @@ import yaml
 DEFAULT_FILE = os.path.join("policies", "default.yaml")
 STAGES = ("specialists", "consolidate", "select", "export", "evaluate", "report")
 _KEYS = {"out", "policy", "parallel", "progress_every", "preset", "specialists", "consolidate",
-         "select", "evaluate"}
+         "select", "refine", "evaluate"}
 
 
 def load_pipeline(path: str) -> dict:
@@ -88,6 +92,13 @@ def load_pipeline(path: str) -> dict:
         from .selection import check_select
 
         out["select"] = check_select(out["select"] or {})
+    if "refine" in out:
+        r = out["refine"]
+        if "select" not in out:
+            raise ValueError("pipeline refine needs a select section (it refines the chosen agent)")
+        if not isinstance(r, dict) or set(r) - {"set"} or not isinstance(r.get("set", []), list):
+            raise ValueError(f"pipeline refine = {r!r}: give {{set: [consolidate.key=value, ...]}}")
+        r.setdefault("set", [])
     return out
 
 
@@ -254,6 +265,29 @@ def _select_stage(cfg: dict, log=print) -> None:
     evaluation_table(agent_from_checkpoint(ck), specialists, ck["state"]["config"], out, log)
 
 
+def _refine_stage(cfg: dict, dirs: list[str], chosen: str, log=print) -> None:
+    """Continues the chosen agent on the pool (``refine.set``), then chooses among its kept agents
+    and the chosen one on the validation episodes (``out/refined/selected.json``)."""
+    from .checkpoints import agent_from_checkpoint, load_checkpoint
+    from .consolidate import evaluation_table
+    from .selection import select_policy
+
+    out = cfg["out"]
+    d = os.path.join(out, "refined")
+    if not os.path.exists(os.path.join(d, "checkpoints", "LATEST")):
+        args = ["consolidate", *dirs, "--out", d, "--preset", cfg["preset"], "--no-eval",
+                "--set", "log.progress_bar=false", "--set", f"consolidate.init={chosen}"]
+        for a in cfg["consolidate"]["set"] + cfg["refine"]["set"]:  # refine's settings win
+            args += ["--set", str(a)]
+        log(f"      refine {chosen} ({', '.join(cfg['refine']['set'])}; log {d}.log)")
+        _run(args, "refine", d + ".log")
+    final = select_policy([d], cfg["select"], d, log, extra=[chosen])
+    specialists = [load_checkpoint(os.path.join(out, n), with_buffer=False)
+                   for n in cfg["specialists"]]
+    ck = load_checkpoint(final, with_buffer=False)
+    evaluation_table(agent_from_checkpoint(ck), specialists, ck["state"]["config"], out, log)
+
+
 def _export(cfg: dict, consolidated: str) -> None:
     policy = cfg["policy"]
     tmp = policy + ".tmp.pt"
@@ -286,6 +320,17 @@ def run_pipeline(cfg: dict, stages=STAGES, log=print) -> None:
         if os.path.exists(selected):
             with open(selected) as fh:
                 chosen = json.load(fh)["checkpoint"]
+        refined = os.path.join(out, "refined", "selected.json")
+        if "refine" in cfg and os.path.exists(selected):
+            if "select" in stages:
+                if os.path.exists(refined):
+                    log("      refine: done")
+                else:
+                    log("      refine: the chosen agent continued on the pool")
+                    _refine_stage(cfg, dirs, chosen, log)
+            if os.path.exists(refined):
+                with open(refined) as fh:
+                    chosen = json.load(fh)["checkpoint"]
     if "export" in stages:
         log(f"[4/6] export {chosen} -> {cfg['policy']}")
         _export(cfg, chosen)

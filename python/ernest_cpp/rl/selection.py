@@ -177,16 +177,18 @@ def _iteration(path: str) -> int:
         return int(json.load(fh)["consolidation"]["iterations"])
 
 
-def select_policy(dirs: list[str], sel: dict, out: str, log=print) -> str:
-    """Evaluate every candidate of the consolidation folders ``dirs``; write
-    ``out/selection.csv`` (all of them) and ``out/selected.json``; return the chosen checkpoint."""
+def select_policy(dirs: list[str], sel: dict, out: str, log=print,
+                  extra: list[str] | None = None) -> str:
+    """Evaluate every candidate of the consolidation folders ``dirs`` (and the checkpoints
+    ``extra``); write ``out/selection.csv`` (all of them) and ``out/selected.json``; return the
+    chosen checkpoint."""
     from ..envs.baselines import CrawlingGaitController
 
     sel = check_select(sel)
     courses = validation_courses(sel)
     slopes = [c for c in courses if c[3] is None]
     crawling = course_results(CrawlingGaitController(), slopes)
-    paths = candidates(dirs)
+    paths = list(extra or []) + candidates(dirs)
     log(f"  {len(paths)} candidates, {len(courses)} validation courses "
         f"(step and trap seeds {sel['seeds'][0]}-{sel['seeds'][1] - 1}), {sel['workers']} workers")
     rows, t0 = [], time.perf_counter()
@@ -217,7 +219,7 @@ def select_policy(dirs: list[str], sel: dict, out: str, log=print) -> str:
         w.writeheader()
         w.writerows(rows + [crawl_row])
     os.replace(tmp, os.path.join(out, "selection.csv"))
-    chosen = os.path.join(out, best["candidate"])
+    chosen = os.path.normpath(os.path.join(out, best["candidate"]))
     tmp = os.path.join(out, "selected.json.tmp")
     with open(tmp, "w") as fh:
         json.dump({"checkpoint": chosen, "targets met": best["targets met"],
