@@ -5,22 +5,31 @@
 //                  loop fuses from ray-cast stereo pairs, seed 004 §2.4)
 //   ernest_runtime --policy FILE --replay observations.csv --actions out.csv
 // (--replay: run the policy on logged normalised observations, one row of 45 per line, and write
-// the actions; the open-loop check of "same observations, same actions".)
+// the actions; the open-loop check of "same observations, same actions". A first line whose first
+// field is not a number is a header; any other field that is not a finite number is refused,
+// naming the file, line and column.) An output that is the same file as an input (or as the
+// other output) is a usage error; an output that cannot be written is a runtime error.
 // --mode env (default) steps envs::RoverEnv exactly as the Python environment does (one
 // telemetry row per policy step); --mode onboard runs the 400 Hz ControlLoop on the simulator
 // interface (telemetry at 50 Hz). Prints progress along the path, travel reduction and cost of
 // transport (Table 6). Exit status: 0 done, 1 runtime error, 2 usage error, 3 diverged.
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <charconv>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <exception>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
+#include <string_view>
+#include <system_error>
+#include <utility>
 #include <vector>
 
 #include "ernest/dynamics/rover_parameters.hpp"
@@ -45,6 +54,17 @@ int report_error(const std::exception& e) {
     std::fprintf(stderr, "ernest_runtime: %s\n", e.what());
   }
   return kExitError;
+}
+
+// Standard output flushed; exit code 1 (with a message on stderr) if it could not be written.
+int finish_stdout() {
+  errno = 0;
+  if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+    std::fprintf(stderr, "ernest_runtime: cannot write standard output: %s\n",
+                 std::strerror(errno != 0 ? errno : EIO));
+    return kExitError;
+  }
+  return 0;
 }
 
 void usage(std::FILE* out) {
@@ -101,6 +121,179 @@ void require_choice(const std::string& option, const std::string& value,
   throw UsageError(option + " '" + value + "' is not one of: " + list);
 }
 
+// Whether two paths name one file: the same inode (hard links, symbolic links, "./x" and "x"), or,
+// for a file not created yet, the same normalised absolute path. Devices and pipes (/dev/null)
+// are never "the same file": writing one twice loses nothing.
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(a, ec);
+  if (!ec && fs::exists(st) && !fs::is_regular_file(st)) return false;
+  ec.clear();
+  if (fs::equivalent(a, b, ec) && !ec) return true;
+  ec.clear();
+  const fs::path ca = fs::weakly_canonical(a, ec);
+  if (ec) return false;
+  const fs::path cb = fs::weakly_canonical(b, ec);
+  return !ec && ca == cb;
+}
+
+// An output must not be an input (it would be truncated before it is read) nor another output.
+void require_distinct(const std::vector<std::pair<std::string, std::string>>& outputs,
+                      const std::vector<std::pair<std::string, std::string>>& inputs) {
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    const auto& [option, path] = outputs[i];
+    if (path.empty()) continue;
+    for (const auto& [in_option, in_path] : inputs)
+      if (!in_path.empty() && same_file(path, in_path))
+        throw UsageError(option + " " + path + " is the same file as " + in_option + " " + in_path +
+                         ": an output never overwrites an input");
+    for (size_t j = 0; j < i; ++j)
+      if (!outputs[j].second.empty() && same_file(path, outputs[j].second))
+        throw UsageError(option + " " + path + " is the same file as " + outputs[j].first + " " +
+                         outputs[j].second + ": each output needs its own file");
+  }
+}
+
+// A file written with printf; every write checked. close() flushes and closes it and throws
+// std::runtime_error naming the path if anything failed (a full disk, /dev/full, a /proc file).
+class OutputFile {
+ public:
+  explicit OutputFile(std::string path) : path_(std::move(path)) {
+    file_ = std::fopen(path_.c_str(), "w");
+    if (!file_) throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(errno));
+  }
+  ~OutputFile() {
+    if (file_) std::fclose(file_);
+  }
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  [[gnu::format(printf, 2, 3)]] void printf(const char* format, ...) {
+    if (!file_) return;
+    std::va_list args;
+    va_start(args, format);
+    const int n = std::vfprintf(file_, format, args);
+    va_end(args);
+    note(n < 0);
+  }
+
+  void close() {
+    if (file_) {
+      note(std::fflush(file_) != 0 || std::ferror(file_) != 0);
+      note(std::fclose(file_) != 0);
+      file_ = nullptr;
+    }
+    if (error_ != 0) throw std::runtime_error("cannot write " + path_ + ": " + std::strerror(error_));
+  }
+
+ private:
+  void note(bool failed) {
+    if (failed && error_ == 0) error_ = errno != 0 ? errno : EIO;
+  }
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  int error_ = 0;
+};
+
+// Logged observations (--replay): one row of kObservationSize comma-separated decimal numbers a
+// line; blank lines are skipped, and so is a first line whose first field is not a number (a
+// header). Anything else that is not a finite number is refused, naming the file, the line, the
+// column (1-based) and the text.
+class ObservationReader {
+ public:
+  explicit ObservationReader(std::string path) : path_(std::move(path)) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path_, ec))
+      throw std::runtime_error("cannot read " + path_ + ": is a directory, expected a CSV file");
+    in_.open(path_);
+    if (!in_) throw std::runtime_error("cannot read " + path_ + ": " + std::strerror(errno));
+  }
+
+  // The next row into `obs`; false at the end of the file.
+  bool next(ernest::sensing::ObservationVector& obs) {
+    std::string line;
+    while (std::getline(in_, line)) {
+      ++line_no_;
+      if (line_no_ == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
+      std::vector<std::string_view> fields = split(line);
+      if (fields.size() == 1 && fields[0].empty()) continue;  // blank line
+      const bool first = !seen_line_;
+      seen_line_ = true;
+      if (first && !starts_number(fields[0])) continue;  // a header
+      const size_t n = static_cast<size_t>(ernest::sensing::kObservationSize);
+      for (size_t c = 0; c < fields.size(); ++c) {
+        const double v = parse(fields[c], c);
+        if (c < n) obs[static_cast<int>(c)] = v;
+      }
+      if (fields.size() != n)
+        fail(": expected " + std::to_string(n) + " values, found " + std::to_string(fields.size()));
+      return true;
+    }
+    if (in_.bad()) throw std::runtime_error("cannot read " + path_ + ": read error after line " +
+                                            std::to_string(line_no_));
+    return false;
+  }
+
+  long line() const { return line_no_; }
+
+ private:
+  static std::string_view trim(std::string_view v) {
+    const auto space = [](char ch) { return ch == ' ' || ch == '\t' || ch == '\r'; };
+    while (!v.empty() && space(v.front())) v.remove_prefix(1);
+    while (!v.empty() && space(v.back())) v.remove_suffix(1);
+    return v;
+  }
+
+  static std::vector<std::string_view> split(std::string_view line) {
+    std::vector<std::string_view> out;
+    size_t start = 0;
+    for (;;) {
+      const size_t comma = line.find(',', start);
+      out.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos
+                                                                             : comma - start)));
+      if (comma == std::string_view::npos) return out;
+      start = comma + 1;
+    }
+  }
+
+  // Whether `text` begins like a decimal number (a header's first field does not); "nan" and
+  // "inf" do, so that such a row is refused rather than skipped.
+  static bool starts_number(std::string_view text) {
+    if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+    double v = 0.0;
+    return std::from_chars(text.data(), text.data() + text.size(), v).ptr != text.data();
+  }
+
+  double parse(std::string_view text, size_t column) const {
+    std::string_view digits = text;
+    if (digits.size() > 1 && digits.front() == '+' && digits[1] != '-') digits.remove_prefix(1);
+    double v = 0.0;
+    const auto [ptr, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+    if (ptr != digits.data() + digits.size() || digits.empty())
+      fail(", column " + std::to_string(column + 1) + ": '" + std::string(text) + "' is not a number");
+    if (ec == std::errc::result_out_of_range) {
+      // from_chars leaves `v` alone then: an underflow reads as strtod's (tiny or zero) value,
+      // an overflow is refused below.
+      const std::string copy(digits);
+      v = std::strtod(copy.c_str(), nullptr);
+    }
+    if (!std::isfinite(v))
+      fail(", column " + std::to_string(column + 1) + ": '" + std::string(text) +
+           "' is not a finite number");
+    return v;
+  }
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw std::runtime_error(path_ + ": line " + std::to_string(line_no_) + what);
+  }
+
+  std::string path_;
+  std::ifstream in_;
+  long line_no_ = 0;
+  bool seen_line_ = false;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -152,6 +345,8 @@ int main(int argc, char** argv) {
       }
       require_choice("--terrain-source", terrain_source, {"truth", "stereo"});
     }
+    require_distinct({{"--actions", actions_path}, {"--telemetry", telemetry_path}},
+                     {{"--policy", policy_path}, {"--replay", replay_path}});
   } catch (const UsageError& e) {
     std::fprintf(stderr, "ernest_runtime: error: %s\n(see ernest_runtime --help)\n", e.what());
     return kExitUsage;
@@ -159,35 +354,25 @@ int main(int argc, char** argv) {
   if (!replay_path.empty()) {
     try {
       runtime::Policy policy(policy_path);
-      std::ifstream in(replay_path);
-      if (!in) throw std::runtime_error("cannot read " + replay_path);
-      std::FILE* out = std::fopen(actions_path.c_str(), "w");
-      if (!out) throw std::runtime_error("cannot write " + actions_path);
-      std::fprintf(out, "step,a_vx,a_yaw,a_roll\n");
-      std::string line;
-      long row = 0, step = 0;
-      while (std::getline(in, line)) {
-        ++row;
-        if (line.empty() || !(std::isdigit(static_cast<unsigned char>(line[0])) || line[0] == '-' ||
-                              line[0] == '+' || line[0] == '.'))
-          continue;  // header or blank
-        std::stringstream ss(line);
-        sensing::ObservationVector obs;
-        std::string cell;
-        int n = 0;
-        while (std::getline(ss, cell, ',')) {
-          if (n >= sensing::kObservationSize) { n = -1; break; }
-          obs[n++] = std::stod(cell);
-        }
-        if (n != sensing::kObservationSize)
-          throw std::runtime_error(replay_path + ":" + std::to_string(row) + ": expected " +
-                                   std::to_string(sensing::kObservationSize) + " values");
+      // Every row is read and checked before the actions file is opened: a malformed input
+      // leaves no partial output.
+      ObservationReader in(replay_path);
+      std::vector<sensing::ObservationVector> rows;
+      for (sensing::ObservationVector obs; in.next(obs);) rows.push_back(obs);
+      if (rows.empty())
+        throw std::runtime_error(replay_path + ": no observations (" + std::to_string(in.line()) +
+                                 " lines, expected rows of " +
+                                 std::to_string(sensing::kObservationSize) + " values)");
+      OutputFile out(actions_path);
+      out.printf("step,a_vx,a_yaw,a_roll\n");
+      long step = 0;
+      for (const sensing::ObservationVector& obs : rows) {
         const sensing::ActionVector act = policy.action(obs);
-        std::fprintf(out, "%ld,%.17g,%.17g,%.17g\n", step++, act[0], act[1], act[2]);
+        out.printf("%ld,%.17g,%.17g,%.17g\n", step++, act[0], act[1], act[2]);
       }
-      std::fclose(out);
+      out.close();
       std::printf("replayed %ld observations through %s\n", step, policy_path.c_str());
-      return 0;
+      return finish_stdout();
     } catch (const std::exception& e) {
       return report_error(e);
     }
@@ -206,6 +391,9 @@ int main(int argc, char** argv) {
                 policy.metadata().layout_version.c_str(), policy.metadata().obs_dim,
                 policy.metadata().act_dim, policy.metadata().policy_rate_hz);
 
+    // Both outputs are opened before the episode: one that cannot be written fails at once.
+    std::unique_ptr<OutputFile> actions_out;
+    if (!actions_path.empty()) actions_out = std::make_unique<OutputFile>(actions_path);
     std::unique_ptr<runtime::Telemetry> telemetry;
     if (!telemetry_path.empty()) telemetry = std::make_unique<runtime::Telemetry>(telemetry_path);
     int step = 0;
@@ -218,15 +406,14 @@ int main(int argc, char** argv) {
         mode == "env" ? runtime::run_env_episode(env, policy, static_cast<std::uint64_t>(seed), telemetry.get(), progress)
                       : runtime::run_onboard_episode(env, policy, static_cast<std::uint64_t>(seed), nullptr,
                                                      telemetry.get(), progress);
-    if (telemetry) telemetry->flush();
-    if (!actions_path.empty()) {
-      std::FILE* f = std::fopen(actions_path.c_str(), "w");
-      if (!f) throw std::runtime_error("cannot write " + actions_path);
-      std::fprintf(f, "step,a_vx,a_yaw,a_roll\n");
+    if (actions_out) {
+      actions_out->printf("step,a_vx,a_yaw,a_roll\n");
       for (size_t k = 0; k < rep.actions.size(); ++k)
-        std::fprintf(f, "%zu,%.17g,%.17g,%.17g\n", k, rep.actions[k][0], rep.actions[k][1], rep.actions[k][2]);
-      std::fclose(f);
+        actions_out->printf("%zu,%.17g,%.17g,%.17g\n", k, rep.actions[k][0], rep.actions[k][1],
+                            rep.actions[k][2]);
+      actions_out->close();
     }
+    if (telemetry) telemetry->close();
     const runtime::LatencyStats lat = policy.latency();
     std::printf("scenario %s seed %lld mode %s: %s after %.1f s (%zu policy steps)\n", scenario.c_str(), seed,
                 mode.c_str(), rep.end.c_str(), rep.metrics.time, rep.actions.size());
@@ -237,7 +424,8 @@ int main(int argc, char** argv) {
     std::printf("inference latency        median %.1f us, p99 %.1f us (%lld calls)\n", lat.median_us, lat.p99_us,
                 static_cast<long long>(lat.count));
     if (mode == "onboard") std::printf("watchdog trips           %ld\n", rep.watchdog_trips);
-    return rep.diverged ? kExitDiverged : 0;
+    const int status = finish_stdout();
+    return status != 0 ? status : rep.diverged ? kExitDiverged : 0;
   } catch (const std::exception& e) {
     return report_error(e);
   }

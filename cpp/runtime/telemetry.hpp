@@ -23,18 +23,29 @@ class Telemetry {
  public:
   /// Opens (truncates) `path` and writes the header; throws std::runtime_error if it cannot.
   explicit Telemetry(const std::string& path);
+  /// Closes the file; a write failure not reported by close() goes unreported.
   ~Telemetry();
   Telemetry(const Telemetry&) = delete;
   Telemetry& operator=(const Telemetry&) = delete;
-  /// One row; values are written with 17 significant digits (exact round trip).
+  /// One row; values are written with 17 significant digits (exact round trip). Never throws (it
+  /// runs inside the control loop): a failed write is kept and reported by close().
   void record(const TelemetryRow& row);
   void flush();
+  /// Flushes and closes the file; throws std::runtime_error naming the path if any write since
+  /// the header failed (a full disk, /dev/full, a file that refuses writes). Idempotent.
+  void close();
+  /// errno of the first failed write, 0 if none so far (buffered writes fail at flush or close).
+  int write_error() const { return error_; }
   long rows() const { return rows_; }
+  const std::string& path() const { return path_; }
   static const char* header();
 
  private:
+  void note(bool failed);
+  std::string path_;
   std::FILE* file_ = nullptr;
   long rows_ = 0;
+  int error_ = 0;
 };
 
 }  // namespace ernest::runtime

@@ -590,3 +590,25 @@ TEST(Telemetry, WritesOneRowPerRecordWithHeader) {
   EXPECT_EQ(cols, 21);
   EXPECT_THROW(runtime::Telemetry("/nonexistent_dir/x.csv"), std::runtime_error);
 }
+
+TEST(Telemetry, CloseReportsAFailedWriteNamingThePath) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "/dev/full does not exist here";
+  runtime::Telemetry tel("/dev/full");
+  runtime::TelemetryRow row;
+  for (int k = 0; k < 100; ++k) tel.record(row);  // more than a stdio buffer: record never throws
+  EXPECT_EQ(tel.rows(), 100);
+  try {
+    tel.close();
+    FAIL() << "close() did not report the failed writes";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot write /dev/full"), std::string::npos) << e.what();
+  }
+  EXPECT_NE(tel.write_error(), 0);
+  EXPECT_THROW(tel.close(), std::runtime_error);  // reported again, not forgotten
+  // A file that takes every write closes cleanly.
+  const std::string path = (tmpdir() / "telemetry_ok.csv").string();
+  runtime::Telemetry ok(path);
+  ok.record(row);
+  EXPECT_NO_THROW(ok.close());
+  EXPECT_EQ(ok.write_error(), 0);
+}

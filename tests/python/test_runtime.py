@@ -245,3 +245,159 @@ def test_runtime_usage_errors_are_distinct_with_exit_code_2(tmp_path):
         assert want in r.stderr and "ernest_runtime --help" in r.stderr, (args, r.stderr)
         messages.add(r.stderr.splitlines()[0])
     assert len(messages) == len(cases)
+
+
+# ------------------------------------------------------------------ files: outputs and inputs
+EPISODE = ["--scenario", "flat", "--seed", "1", "--duration", "1", "--quiet"]
+
+
+def _observations_csv(path, rows: int = 3, header: str | None = None) -> None:
+    lines = ([header] if header is not None else []) + \
+        [",".join(f"{0.01 * (k + i):.6g}" for i in range(sensing.OBSERVATION_SIZE))
+         for k in range(rows)]
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("mode", ["env", "onboard"])
+@pytest.mark.parametrize("option, target", [
+    ("--actions", "/dev/full"), ("--telemetry", "/dev/full"), ("--actions", "/proc/version"),
+    ("--telemetry", "/proc/version"), ("--actions", "{tmp}/no_such_dir/a.csv"),
+    ("--telemetry", "{tmp}")])
+def test_runtime_exits_nonzero_when_an_output_cannot_be_written(exported, tmp_path, mode, option,
+                                                                target):
+    if target.startswith("/") and not os.path.exists(target):
+        pytest.skip(f"{target} does not exist here")
+    _, _, path = exported
+    target = target.format(tmp=tmp_path)
+    r = run_runtime("--policy", path, *EPISODE, "--mode", mode, option, target)
+    assert r.returncode == 1, (r.returncode, r.stdout, r.stderr)
+    assert f"cannot write {target}" in r.stderr, r.stderr
+
+
+def test_replay_exits_nonzero_when_the_actions_cannot_be_written(exported, tmp_path):
+    _, _, path = exported
+    obs = tmp_path / "obs.csv"
+    _observations_csv(obs)
+    for target in ("/dev/full", str(tmp_path / "no_such_dir" / "a.csv"), str(tmp_path)):
+        if target == "/dev/full" and not os.path.exists(target):
+            continue
+        r = run_runtime("--policy", path, "--replay", str(obs), "--actions", target)
+        assert r.returncode == 1 and f"cannot write {target}" in r.stderr, (target, r.stderr)
+        assert "replayed" not in r.stdout
+
+
+def test_runtime_never_overwrites_an_input(exported, tmp_path):
+    _, _, path = exported
+    obs = tmp_path / "obs.csv"
+    _observations_csv(obs)
+    before = obs.read_bytes()
+    policy_before = open(path, "rb").read()
+    link = tmp_path / "link.csv"
+    os.symlink(obs, link)
+    hard = tmp_path / "hard.csv"
+    os.link(obs, hard)
+    same = [str(obs), str(tmp_path / "." / "obs.csv"), str(link), str(hard)]
+    for out in same:
+        r = run_runtime("--policy", path, "--replay", str(obs), "--actions", out)
+        assert r.returncode == 2, (out, r.stdout, r.stderr)
+        assert "is the same file as --replay" in r.stderr and out in r.stderr, r.stderr
+        assert obs.read_bytes() == before
+    for option in ("--actions", "--telemetry"):
+        r = run_runtime("--policy", path, *EPISODE, option, path)
+        assert r.returncode == 2 and "is the same file as --policy" in r.stderr, r.stderr
+    r = run_runtime("--policy", path, "--replay", str(obs), "--actions", path)
+    assert r.returncode == 2 and "is the same file as --policy" in r.stderr, r.stderr
+    assert open(path, "rb").read() == policy_before
+    # Two outputs into one file would interleave: refused too.
+    out = tmp_path / "out.csv"
+    out.write_text("keep\n")
+    r = run_runtime("--policy", path, *EPISODE, "--actions", str(out), "--telemetry",
+                    str(tmp_path / "." / "out.csv"))
+    assert r.returncode == 2 and "--telemetry" in r.stderr and "same file as --actions" \
+        in r.stderr, r.stderr
+    assert out.read_text() == "keep\n"
+    if os.path.exists("/dev/null"):  # a device taking both outputs loses nothing: accepted
+        r = run_runtime("--policy", path, *EPISODE, "--actions", "/dev/null", "--telemetry",
+                        "/dev/null")
+        assert r.returncode == 0, r.stderr
+    # An ordinary replay still works, with or without a header line.
+    for header in (None, "o0,o1,o2"):
+        _observations_csv(obs, header=header)
+        r = run_runtime("--policy", path, "--replay", str(obs), "--actions", str(out))
+        assert r.returncode == 0 and "replayed 3 observations" in r.stdout, r.stdout + r.stderr
+        assert len(out.read_text().splitlines()) == 4
+
+
+N = sensing.OBSERVATION_SIZE
+
+
+def _row(first: str = "0", last: str = "0", n: int = N) -> str:
+    return ",".join([first] + ["0.25"] * (n - 2) + [last])
+
+
+@pytest.mark.parametrize("lines, where, what", [
+    ([_row(), _row("nan")], "line 2, column 1", "'nan' is not a finite number"),
+    ([_row("nan")], "line 1, column 1", "'nan' is not a finite number"),
+    ([_row(), _row("-inf")], "line 2, column 1", "'-inf' is not a finite number"),
+    ([_row("INF")], "line 1, column 1", "'INF' is not a finite number"),
+    (["o1,o2", _row("0.5xyz")], "line 2, column 1", "'0.5xyz' is not a number"),
+    ([_row(last="abc")], f"line 1, column {N}", "'abc' is not a number"),
+    ([_row(), _row("1e999")], "line 2, column 1", "'1e999' is not a finite number"),
+    ([_row(), _row(last="-1e999")], f"line 2, column {N}", "'-1e999' is not a finite number"),
+    ([_row(), "0,,0"], "line 2, column 2", "'' is not a number"),
+    ([_row(), _row(), "header,again"], "line 3, column 1", "'header' is not a number"),
+    ([_row(), _row(n=N - 1)], "line 2", f"expected {N} values, found {N - 1}"),
+    ([_row(n=N + 1)], "line 1", f"expected {N} values, found {N + 1}"),
+    ([_row(), _row("0x1p3")], "line 2, column 1", "'0x1p3' is not a number"),
+])
+def test_replay_refuses_malformed_rows_naming_file_line_and_column(exported, tmp_path, lines,
+                                                                   where, what):
+    _, _, path = exported
+    obs = tmp_path / "obs.csv"
+    obs.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "actions.csv"
+    r = run_runtime("--policy", path, "--replay", str(obs), "--actions", str(out))
+    assert r.returncode == 1, (r.stdout, r.stderr)
+    assert f"{obs}: {where}" in r.stderr and what in r.stderr, r.stderr
+    assert "replayed" not in r.stdout
+
+
+def test_replay_reads_crlf_and_spaced_fields(exported, tmp_path):
+    _, _, path = exported
+    obs, ref = tmp_path / "obs.csv", tmp_path / "ref.csv"
+    _observations_csv(ref)
+    obs.write_bytes(b"".join(b" " + ln.replace(b",", b" , ") + b"\r\n"
+                             for ln in ref.read_bytes().splitlines()))
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    assert run_runtime("--policy", path, "--replay", str(ref), "--actions", str(a)).returncode == 0
+    r = run_runtime("--policy", path, "--replay", str(obs), "--actions", str(b))
+    assert r.returncode == 0, r.stderr
+    assert a.read_text() == b.read_text()
+
+
+def test_replay_refuses_a_directory_or_an_unreadable_input(exported, tmp_path):
+    _, _, path = exported
+    out = tmp_path / "actions.csv"
+    r = run_runtime("--policy", path, "--replay", str(tmp_path), "--actions", str(out))
+    assert r.returncode == 1 and f"cannot read {tmp_path}" in r.stderr, r.stderr
+    assert "is a directory" in r.stderr and "replayed" not in r.stdout
+    r = run_runtime("--policy", path, "--replay", str(tmp_path / "missing.csv"), "--actions",
+                    str(out))
+    assert r.returncode == 1 and f"cannot read {tmp_path / 'missing.csv'}" in r.stderr, r.stderr
+    empty = tmp_path / "empty.csv"
+    empty.write_text("")
+    r = run_runtime("--policy", path, "--replay", str(empty), "--actions", str(out))
+    assert r.returncode == 1 and f"{empty}: no observations" in r.stderr, r.stderr
+
+
+def test_runtime_exits_nonzero_when_standard_output_cannot_be_written(exported, tmp_path):
+    if not os.path.exists("/dev/full"):
+        pytest.skip("/dev/full does not exist here")
+    _, _, path = exported
+    obs = tmp_path / "obs.csv"
+    _observations_csv(obs)
+    for args in ([*EPISODE], ["--replay", str(obs), "--actions", str(tmp_path / "a.csv")]):
+        with open("/dev/full", "w") as full:
+            r = subprocess.run([runtime_exe(), "--policy", path, *args], stdout=full,
+                               stderr=subprocess.PIPE, text=True, timeout=300)
+        assert r.returncode == 1 and "cannot write standard output" in r.stderr, (args, r.stderr)
