@@ -193,3 +193,47 @@ def test_corrupt_latest_checkpoint_points_at_the_good_one_and_pruning_keeps_it(t
     left = sorted(d for d in os.listdir(ck_root) if d.startswith("step-"))
     # step-100 pruned (older, keep=1); step-200 (beyond the resume point) left to inspect.
     assert left == ["step-000000000150", "step-000000000200"]
+
+
+def test_export_never_replaces_a_device_pipe_or_folder_and_reports_unwritable_paths(tmp_path,
+                                                                                    capsys):
+    """The export renames a verified temporary file onto --out: over a pipe or a device node
+    (/dev/null, /dev/full, run as root) that would put a regular file in its place, so a target
+    that exists and is not a regular file is refused; a path that cannot be written ends with one
+    error line (exit 2), not a traceback."""
+    import stat
+
+    targets = []
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    targets.append((fifo, stat.S_ISFIFO))
+    dev = tmp_path / "full"
+    try:
+        os.mknod(dev, stat.S_IFCHR | 0o666, os.makedev(1, 7))  # like /dev/full
+        targets.append((dev, stat.S_ISCHR))
+    except (OSError, AttributeError):
+        pass  # no privilege to make device nodes here: the pipe stands for them
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    targets.append((folder, stat.S_ISDIR))
+    actor = Actor(sensing.OBSERVATION_SIZE, sensing.ACTION_SIZE, 16)
+    for target, kind in targets:
+        with pytest.raises(ExportError, match=f"cannot write {target}: not a regular file"):
+            export_actor(actor, LAYOUT, str(target))
+        assert kind(os.lstat(target).st_mode), target
+    assert sorted(os.listdir(tmp_path)) == sorted(t.name for t, _ in targets)  # no temporaries
+    # The command: one line, exit code 2, for a refused target and for an unwritable one.
+    run = tmp_path / "run"
+    tr = Trainer(C.build_config("quick", None, [
+        "env.id=ernest-toy/PointMass-v0", "td3.hidden=16", "random_steps=20",
+        "learning_starts=20", "total_steps=20", "eval.every_steps=0", "checkpoint.every_steps=20",
+        "log.progress_bar=false", "log.tensorboard=false", "buffer_size=100"]), str(run))
+    tr.train()
+    tr.close()
+    capsys.readouterr()
+    assert cli.main(["export", str(run), "--out", str(fifo)]) == 2
+    assert f"cannot write {fifo}: not a regular file" in capsys.readouterr().err
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    if os.path.isdir("/proc"):  # a folder that takes no new files
+        assert cli.main(["export", str(run), "--out", "/proc/ernest-policy.pt"]) == 2
+        assert "cannot write /proc/ernest-policy.pt" in capsys.readouterr().err

@@ -144,11 +144,19 @@ def load_policy(path: str) -> tuple[torch.jit.ScriptModule, dict]:
 
 
 def _save_verified(module, meta: dict, path: str, check) -> None:
-    """Save to a temporary sibling, reload it, run ``check(loaded, meta_back)``, rename."""
+    """Save to a temporary sibling, reload it, run ``check(loaded, meta_back)``, rename. ``path``
+    must be a regular file or not exist yet: the rename would put a regular file in the place of
+    a device (/dev/null), a pipe or a folder."""
+    if os.path.lexists(path) and not os.path.isfile(path):
+        raise ExportError(f"cannot write {path}: not a regular file (a policy is written beside "
+                          f"it and renamed into its place); give a .pt file path")
     tmp = f"{path}.tmp-{uuid.uuid4().hex[:8]}"
     try:
-        with _quiet_jit():
-            torch.jit.save(module, tmp, _extra_files={METADATA_FILE: json.dumps(meta)})
+        try:
+            with _quiet_jit():
+                torch.jit.save(module, tmp, _extra_files={METADATA_FILE: json.dumps(meta)})
+        except Exception as exc:  # torch raises RuntimeError for a file it cannot write
+            raise ExportError(f"cannot write {path}: {exc}") from None
         loaded, meta_back = load_policy(tmp)
         if meta_back != json.loads(json.dumps(meta)):
             raise ExportError("metadata read back differs from the metadata written")
