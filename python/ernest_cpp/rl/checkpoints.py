@@ -21,8 +21,9 @@ STEP_DIR = re.compile(r"^step-\d+$")
 def find_checkpoint(path: str) -> str:
     """A checkpoint folder from a run folder (its latest), a checkpoints folder, or itself.
 
-    The latest is the one ``LATEST`` names; when ``LATEST`` is missing, empty, or does not name a
-    ``step-N`` folder that exists, it is the newest ``step-N`` folder that verifies."""
+    The latest is the one ``LATEST`` names (a ``step-N`` folder, or a consolidation's
+    ``consolidated``); when ``LATEST`` is missing, empty, or does not name such a folder that
+    exists, it is the newest ``step-N`` folder that verifies."""
     if os.path.isfile(os.path.join(path, "manifest.json")):
         return path
     for base in (os.path.join(path, "checkpoints"), path):
@@ -34,7 +35,9 @@ def find_checkpoint(path: str) -> str:
                     name = fh.read(256).strip()
             except OSError:
                 name = ""
-            if STEP_DIR.match(name) and os.path.isdir(os.path.join(base, name)):
+            # a step-N folder, or a consolidation's final agent (``consolidated``) beside LATEST
+            if (STEP_DIR.match(name) or name == "consolidated") and os.path.isdir(
+                    os.path.join(base, name)):
                 return os.path.join(base, name)
         good = newest_good_checkpoint(base)
         if good is not None:
