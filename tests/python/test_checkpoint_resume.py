@@ -76,6 +76,22 @@ def test_resume_finds_the_newest_intact_checkpoint_without_a_usable_latest(run, 
     assert open(os.path.join(root, "LATEST")).read().strip() == "step-000000000300"
 
 
+def test_a_consolidation_folder_is_found_by_its_latest_or_without_it(run, tmp_path):
+    cons = str(tmp_path / "cons")
+    assert cli.main(["consolidate", run, "--out", cons, "--no-eval", "--set",
+                     "consolidate.iterations=5", "--set", "consolidate.hidden=16", "--set",
+                     "consolidate.batch_size=16", "--set", "log.progress_bar=false"]) == 0
+    final = os.path.join(cons, "checkpoints", "consolidated")
+    assert load_checkpoint(cons, with_buffer=False)["path"] == final
+    for latest in (b"", b"garbage\n", None):
+        if latest is None:
+            os.remove(os.path.join(cons, "checkpoints", "LATEST"))
+        else:
+            with open(os.path.join(cons, "checkpoints", "LATEST"), "wb") as fh:
+                fh.write(latest)
+        assert load_checkpoint(cons, with_buffer=False)["path"] == final
+
+
 def test_no_intact_checkpoint_and_no_latest_says_why(run):
     root = _ck_root(run)
     os.remove(os.path.join(root, "LATEST"))

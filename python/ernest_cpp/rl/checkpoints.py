@@ -23,7 +23,7 @@ def find_checkpoint(path: str) -> str:
 
     The latest is the one ``LATEST`` names (a ``step-N`` folder, or a consolidation's
     ``consolidated``); when ``LATEST`` is missing, empty, or does not name such a folder that
-    exists, it is the newest ``step-N`` folder that verifies."""
+    exists, it is the newest ``step-N`` folder that verifies, or else ``consolidated``."""
     if os.path.isfile(os.path.join(path, "manifest.json")):
         return path
     for base in (os.path.join(path, "checkpoints"), path):
@@ -43,6 +43,8 @@ def find_checkpoint(path: str) -> str:
         if good is not None:
             return good
         steps = _step_dirs(base)
+        if not steps and os.path.isdir(os.path.join(base, "consolidated")):
+            return os.path.join(base, "consolidated")  # a consolidation's final agent
         if steps:  # step-N folders, none of them intact: say why the newest is not
             try:
                 read_manifest(os.path.join(base, steps[0]), "checkpoint", verify=True)
