@@ -137,6 +137,11 @@ def test_pipeline_refines_the_chosen_agent_and_chooses_again(tmp_path):
     again: list[str] = []
     P.run_pipeline(cfg, stages=("select",), log=again.append)
     assert "[3/6] select: done" in again and "      refine: done" in again
+    folder = tmp_path / "a-folder"
+    folder.mkdir()
+    with pytest.raises(RuntimeError, match="not a regular file"):  # never replaced by the policy
+        P.run_pipeline({**cfg, "policy": str(folder)}, stages=("export",), log=lambda s: None)
+    assert folder.is_dir()
     with pytest.raises(ValueError, match="refine needs a select section"):
         P.load_pipeline(_pipeline(tmp_path, refine=refine))
     with pytest.raises(ValueError, match="pipeline refine"):
@@ -149,6 +154,7 @@ def test_pipeline_resumes_an_interrupted_specialist(tmp_path):
     cfg["specialists"]["step"]["steps"] = 20
     P.run_pipeline(cfg, stages=("specialists",), log=lambda s: None)
     cfg["specialists"]["step"]["steps"] = 40  # as if it had been stopped after 20
+    os.remove(os.path.join(cfg["out"], "step", "checkpoints", "LATEST"))  # lost: found without it
     lines: list[str] = []
     P.run_pipeline(cfg, stages=("specialists",), log=lines.append)
     assert any("resuming at 20" in ln for ln in lines)

@@ -103,16 +103,22 @@ def load_pipeline(path: str) -> dict:
 
 
 def _checkpoint_step(run_dir: str) -> int | None:
-    """Step of a run's newest checkpoint (None: no checkpoint yet)."""
-    latest = os.path.join(run_dir, "checkpoints", "LATEST")
-    try:
-        with open(latest) as fh:
-            name = fh.read().strip()
-    except OSError:
+    """Step of a run's newest intact checkpoint (None: no checkpoint yet). A lost or garbled
+    ``LATEST`` falls back to the newest intact ``step-N`` (``checkpoints.find_checkpoint``); step-N
+    folders none of which is intact are an error, not a fresh start."""
+    from .checkpoints import STEP_DIR, find_checkpoint
+    from .storage import CorruptFileError
+
+    root = os.path.join(run_dir, "checkpoints")
+    if not os.path.isdir(root):
         return None
-    if name.startswith("step-"):
-        return int(name[5:])
-    return None
+    try:
+        name = os.path.basename(find_checkpoint(run_dir))
+    except CorruptFileError as exc:
+        if any(STEP_DIR.match(d) for d in os.listdir(root)):
+            raise RuntimeError(f"specialist {run_dir}: {exc}") from None
+        return None
+    return int(name[5:]) if STEP_DIR.match(name) else None
 
 
 def _die_with_parent() -> None:
@@ -290,6 +296,8 @@ def _refine_stage(cfg: dict, dirs: list[str], chosen: str, log=print) -> None:
 
 def _export(cfg: dict, consolidated: str) -> None:
     policy = cfg["policy"]
+    if os.path.lexists(policy) and not os.path.isfile(policy):  # a device, pipe or folder
+        raise RuntimeError(f"policy = {policy} exists and is not a regular file: not replaced")
     tmp = policy + ".tmp.pt"
     _run(["export", consolidated, "--out", tmp], "export")
     _run(["stamp-policy", tmp], "stamp-policy")
