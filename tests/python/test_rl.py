@@ -595,6 +595,11 @@ def test_consolidation_continues_a_given_agent_on_relabelled_rewards(tmp_path, c
                      f"consolidate.init={first['path']}", "--set", "consolidate.hidden=32",
                      "--set", "log.progress_bar=false", "--no-eval"]) == 2
     assert "consolidate.init" in capsys.readouterr().err
+    # an output that cannot be written is refused before any training
+    blocker = tmp_path / "a-file"
+    blocker.write_text("x")
+    assert cli.main(["consolidate", run, "--out", str(blocker)] + small) == 2
+    assert f"cannot write to {blocker}" in capsys.readouterr().err
 
 
 # ----------------------------------------------------------------------------------- rover env

@@ -96,6 +96,18 @@ def keep_settings(c: dict) -> tuple[int, int]:
     return every, start
 
 
+def _check_writable(folder: str) -> None:
+    """Creates ``folder`` and writes a probe file in it; an OSError becomes a ValueError naming it."""
+    probe = os.path.join(folder, ".write-probe")
+    try:
+        os.makedirs(folder, exist_ok=True)
+        with open(probe, "w") as fh:
+            fh.write("ok")
+        os.remove(probe)
+    except OSError as exc:
+        raise ValueError(f"consolidate: cannot write to {folder}: {exc.strerror or exc}") from None
+
+
 def _write_agent(path: str, agent: TD3, state: dict) -> None:
     with AtomicDir(path, "checkpoint", {"consolidated": True}) as tmp:
         torch.save(agent.state_dict(), os.path.join(tmp, "agent.pt"))
@@ -108,6 +120,7 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
     """``ray`` ({address, object_store_mb}): evaluate on a Ray cluster (one task per policy and
     environment) instead of in this process."""
     c = cfg["consolidate"]
+    _check_writable(os.path.join(out_dir, "checkpoints"))  # before minutes of training, not after
     torch.set_num_threads(int(cfg["torch_threads"]))
     device = resolve_device(cfg.get("learner_device", "cpu"))
     specialists = []
