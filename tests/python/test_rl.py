@@ -254,6 +254,22 @@ def test_ring_buffer_wraps_and_keeps_order():
     assert buf.ptr == 155 % 100
 
 
+def test_buffer_refuses_non_finite_transitions():
+    buf = _filled_buffer(n=10, cap=20)
+    size = buf.size
+    good = [np.zeros(45), np.zeros(3), 0.0, np.zeros(45), 0.0]
+    for k, name in ((0, "obs"), (1, "act"), (2, "rew"), (3, "next_obs")):
+        bad = list(good)
+        bad[k] = np.full_like(np.atleast_1d(good[k]), np.nan, dtype=float)
+        with pytest.raises(ValueError, match=f"{name} of transition 0 of 1 is not finite"):
+            buf.add(*bad)
+    with pytest.raises(ValueError, match="rew of transition 1 of 2"):
+        buf.add(np.zeros((2, 45)), np.zeros((2, 3)), [0.0, np.inf], np.zeros((2, 45)), [0, 0])
+    assert buf.size == size  # nothing of a refused batch is stored
+    buf.add(*good)
+    assert buf.size == size + 1
+
+
 def test_buffer_save_load_round_trip(tmp_path):
     buf = _filled_buffer(n=2500, cap=2000, obs_dim=45)
     buf.set_noise([6, 7], [0.1, 0.2])

@@ -68,6 +68,12 @@ class ReplayBuffer:
         rew = np.asarray(rew, np.float32).reshape(n)
         next_obs = np.asarray(next_obs, np.float32).reshape(n, self.obs_dim)
         done = np.asarray(done, np.float32).reshape(n)
+        for name, x in (("obs", obs), ("act", act), ("rew", rew), ("next_obs", next_obs),
+                        ("done", done)):
+            if not np.isfinite(x).all():  # one NaN reward would poison the critic for good
+                row = int(np.argwhere(~np.isfinite(x))[0][0])
+                raise ValueError(f"ReplayBuffer.add: {name} of transition {row} of {n} is not "
+                                 f"finite")
         if n > self.capacity:  # only the last `capacity` can survive
             obs, act, rew, next_obs, done = (x[-self.capacity:] for x in
                                              (obs, act, rew, next_obs, done))
