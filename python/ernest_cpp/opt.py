@@ -60,13 +60,21 @@ DIRECTIONS = ("squirming->wheel_walking", "wheel_walking->squirming")
 
 
 def as_strategy(strategy: str | Strategy) -> Strategy:
-    return strategy if isinstance(strategy, Strategy) else strategy_from_string(strategy.lower())
+    """A Strategy from itself or its name (naive, bezier, linear, spline; any case)."""
+    if isinstance(strategy, Strategy):
+        return strategy
+    if not isinstance(strategy, str):
+        raise ValueError(f"strategy = {strategy!r} must be a Strategy or one of the names "
+                         f"naive, bezier, linear, spline")
+    return strategy_from_string(strategy.lower())
 
 
 def weights_for(strategy: str | Strategy, weights: str | CostWeights | None) -> CostWeights:
     """Table 1 weights by set name, or the given CostWeights (None: balanced)."""
     if isinstance(weights, CostWeights):
         return weights
+    if weights is not None and not isinstance(weights, str):
+        raise ValueError(f"weights = {weights!r} must be a CostWeights, a weight-set name or None")
     s = as_strategy(strategy)
     if s == Strategy.Naive:
         return CostWeights()

@@ -91,6 +91,11 @@ def test_invalid_parameters_raise_value_error_naming_the_field():
         p.validate()
     with pytest.raises(ValueError):
         O.plan(O.asterix_problem(0.0), "warp-drive")
+    with pytest.raises(ValueError, match="strategy = 1.5 must be a Strategy"):
+        O.as_strategy(1.5)
+    with pytest.raises(ValueError, match="weights = 3 must be"):
+        O.weights_for("bezier", 3)
+    assert O.as_strategy("Bezier") == O.as_strategy(O.as_strategy("bezier"))
 
 
 def test_constant_steering_circle_from_python():
