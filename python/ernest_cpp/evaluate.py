@@ -14,6 +14,7 @@ import time
 import gymnasium as gym
 import numpy as np
 
+from . import _args
 from . import envs as E
 from .envs.baselines import CrawlingGaitController, PassiveController
 
@@ -269,7 +270,7 @@ def add_parser(sub) -> None:
                        "evaluation courses",
                        description=__doc__)
     p.add_argument("--out", default="out/report", help="output folder (default: out/report)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=_args.seed, default=0)
     p.add_argument("--policy", default=None, help="exported TorchScript policy to evaluate too")
     p.add_argument("--no-video", action="store_true", help="skip the animation")
     from .rl.commands import backend_args

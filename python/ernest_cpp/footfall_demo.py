@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _args
 from . import footfall as F
 from . import footfall_terrain
 
@@ -158,7 +159,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("footfall", help="seed 003 §3–6: a FootFall gait cycle around rocks, executed in ODE",
                        description=__doc__)
     p.add_argument("--out", type=Path, default=Path("out/footfall"))
-    p.add_argument("--seed", type=int, default=3, help="rock field and planner seed")
+    p.add_argument("--seed", type=_args.seed, default=3, help="rock field and planner seed")
     p.add_argument("--cell", type=float, default=0.02, help="stability map cell [m]")
     p.add_argument("--rocks", type=int, default=60)
     p.add_argument("--terrain", choices=footfall_terrain.SOURCES, default="truth",

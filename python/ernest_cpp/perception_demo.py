@@ -16,6 +16,7 @@ import os
 
 import numpy as np
 
+from . import _args
 from . import dynamics as D
 from . import perception as P
 from . import sensing as S
@@ -166,7 +167,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--scenario", default="rockfield", help="scenario name (default rockfield)")
     p.add_argument("--out", default="out/perception", help="output folder (default out/perception)")
     p.add_argument("--frames", type=int, default=4, help="frames to fuse (default 4)")
-    p.add_argument("--seed", type=int, default=0, help="scenario seed (default 0)")
+    p.add_argument("--seed", type=_args.seed, default=0, help="scenario seed (default 0)")
     p.add_argument("--algorithm", default="bm", help="bm (StereoBM, default) or sgbm")
     p.set_defaults(func=main_args)
 

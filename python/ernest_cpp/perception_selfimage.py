@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 
+from . import _args
 from . import perception as P
 from . import walker as W
 
@@ -171,7 +172,7 @@ def demo(out_dir: str, seed: int = 3, poses=POSES) -> dict:
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default="out/selfimage")
-    ap.add_argument("--seed", type=int, default=3)
+    ap.add_argument("--seed", type=_args.seed, default=3)
     args = ap.parse_args(argv)
     res = demo(args.out, args.seed)
     print(json.dumps({k: v for k, v in res.items() if k != "poses"}, indent=2))

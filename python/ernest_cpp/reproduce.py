@@ -18,6 +18,8 @@ in the row (never written by hand), and, where it does not, a one-line reason fr
 
 from __future__ import annotations
 
+from . import _args
+
 import argparse
 import math
 import os
@@ -757,7 +759,7 @@ def add_parser(sub) -> None:
     p.add_argument("--policy", default=DEFAULT_POLICY, action=_PolicyAction,
                    help=f"exported learned policy (default {DEFAULT_POLICY} if it exists; '' for "
                         "none)")
-    p.add_argument("--seed", type=int, default=0, help="first episode seed (default 0)")
+    p.add_argument("--seed", type=_args.seed, default=0, help="first episode seed (default 0)")
     p.add_argument("--seeds", type=int, default=3,
                    help="episodes per course and controller (default 3; the evaluation courses "
                         "differ only in the rigid contacts' friction)")

@@ -86,3 +86,15 @@ def test_help_is_plain_text(capsys):
     for text in texts:
         assert "``" not in text and ":class:" not in text and ":func:" not in text
     assert "ernest COMMAND --help" in texts[0]
+
+
+@pytest.mark.parametrize("command", [["train", "--env", "ernest/Slope-v0"], ["perception"],
+                                     ["footfall"], ["evaluate"], ["reproduce"]])
+@pytest.mark.parametrize("seed, message", [("-1", "-1 is outside [0, 2**64)"),
+                                           (str(2 ** 64), f"{2 ** 64} is outside [0, 2**64)"),
+                                           ("x", "'x' is not a whole number")])
+def test_every_seed_option_names_itself_and_its_range(capsys, command, seed, message):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(command + ["--seed", seed])
+    assert exc.value.code == 2
+    assert f"argument --seed: {message}" in capsys.readouterr().err

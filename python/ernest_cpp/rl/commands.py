@@ -10,6 +10,8 @@ import json
 import os
 import re
 
+from .. import _args
+
 
 def _passive_openmp() -> None:
     """Idle OpenMP threads sleep instead of spinning (before torch loads its OpenMP runtime). On a
@@ -208,7 +210,7 @@ def add_parser(subparsers) -> None:
                    "rewrite config.yaml")
     p.add_argument("--steps", type=_positive_int,
                    help="total transitions to collect (total_steps, at least 1)")
-    p.add_argument("--seed", type=int)
+    p.add_argument("--seed", type=_args.seed)
     backend_args(p)
     p.add_argument("--num-workers", type=_positive_int, help="Ray rollout workers (ray.num_workers)")
     p.add_argument("--envs-per-worker", type=_positive_int,
