@@ -19,6 +19,8 @@ namespace ernest::footfall {
 using GeometryPtr = std::shared_ptr<fcl::CollisionGeometryd>;
 
 Eigen::MatrixXd default_clearance_table(int joints) {
+  // a leg has a handful of joints; a negative count would be a bad_alloc deep in Eigen
+  require_in_range("default_clearance_table", "joints", joints, 1, 64);
   Eigen::MatrixXd t = Eigen::MatrixXd::Constant(joints + 1, joints + 2, 0.05);
   t.col(joints + 1).setConstant(0.03);
   return t;

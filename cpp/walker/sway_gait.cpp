@@ -97,6 +97,7 @@ void phase_constraints(PhaseEvaluator& ev, const SwayGaitOptions& o, int phase,
 
 void SwayGaitOptions::validate(int legs) const {
   const char* o = "SwayGaitOptions";
+  require_in_range(o, "legs", legs, 1, 64);  // sizes the seen-legs table below
   require_in_range(o, "stride", stride, 0.0, 5.0);
   require_finite(o, "heading", heading);
   require_in_range(o, "lift_height", lift_height, 0.0, 2.0);

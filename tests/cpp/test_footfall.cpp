@@ -48,6 +48,11 @@ TEST(Footfall, OptionsNameTheField) {
   CollisionOptions t;
   t.clearance_table = Eigen::MatrixXd::Zero(3, 3);
   EXPECT_NE(invalid_argument_message([&] { t.validate(6); }).find("clearance_table"), std::string::npos);
+  // a joint count that would size a huge or negative table is refused, not a bad_alloc
+  for (int joints : {-5, 0, 1 << 20})
+    EXPECT_NE(invalid_argument_message([&] { default_clearance_table(joints); }).find("joints"),
+              std::string::npos);
+  EXPECT_EQ(default_clearance_table(6).rows(), 7);
   PlannerOptions p;
   p.epsilon = std::nan("");
   EXPECT_NE(invalid_argument_message([&] { p.validate(); }).find("epsilon"), std::string::npos);

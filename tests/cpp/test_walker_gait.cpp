@@ -55,6 +55,13 @@ TEST(WalkerLoads, OneAndTwoLegsLiftedMatchTheClosedFormDistribution) {
             std::string::npos);
 }
 
+TEST(WalkerSwayGait, OptionsRefuseALegCountTheyCannotHold) {
+  const SwayGaitOptions o;
+  o.validate(6);
+  for (int legs : {-2147483647 - 1, 0, 1 << 20})
+    EXPECT_NE(invalid_argument_message([&] { o.validate(legs); }).find("legs"), std::string::npos);
+}
+
 TEST(WalkerSwayGait, LowersEveryPhasePeakWithFootfallsFixed) {
   const WalkerModel m(sdm_b_parameters());
   SwayGaitOptions o;
