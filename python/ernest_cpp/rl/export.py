@@ -143,13 +143,19 @@ def load_policy(path: str) -> tuple[torch.jit.ScriptModule, dict]:
     return mod, meta
 
 
-def _save_verified(module, meta: dict, path: str, check) -> None:
-    """Save to a temporary sibling, reload it, run ``check(loaded, meta_back)``, rename. ``path``
-    must be a regular file or not exist yet: the rename would put a regular file in the place of
-    a device (/dev/null), a pipe or a folder."""
+def check_replaceable(path: str) -> None:
+    """``path`` must be a regular file or not exist yet: a policy is written beside it and renamed
+    into its place, which would put a regular file where a device (/dev/null), a pipe or a folder
+    was."""
     if os.path.lexists(path) and not os.path.isfile(path):
         raise ExportError(f"cannot write {path}: not a regular file (a policy is written beside "
                           f"it and renamed into its place); give a .pt file path")
+
+
+def _save_verified(module, meta: dict, path: str, check) -> None:
+    """Save to a temporary sibling, reload it, run ``check(loaded, meta_back)``, rename (``path``:
+    see ``check_replaceable``)."""
+    check_replaceable(path)
     tmp = f"{path}.tmp-{uuid.uuid4().hex[:8]}"
     try:
         try:

@@ -240,12 +240,7 @@ def run_consolidations(cfg: dict, dirs: list[str], cons_dirs: list[str], log=pri
         if os.path.exists(os.path.join(d, "checkpoints", "LATEST")):
             log(f"  consolidation seed {seed}: done")
             return None
-        args = ["consolidate", *dirs, "--out", d, "--preset", cfg["preset"],
-                "--set", "log.progress_bar=false", "--set", f"seed={seed}"]
-        if "select" in cfg:
-            args.append("--no-eval")  # the selected agent's table is written by select
-        for a in cfg["consolidate"]["set"]:
-            args += ["--set", str(a)]
+        args = _consolidate_args(cfg, dirs, d, [f"seed={seed}", *cfg["consolidate"]["set"]])
         log(f"  consolidation seed {seed}: start (log {d}.log)")
         return _ernest(args, d + ".log"), d + ".log"
 
@@ -255,49 +250,60 @@ def run_consolidations(cfg: dict, dirs: list[str], cons_dirs: list[str], log=pri
     _in_parallel(jobs, cfg["parallel"], "consolidation", log)
 
 
-def _select_stage(cfg: dict, log=print) -> None:
-    """Choose among the kept agents (``out/selected.json``, ``out/selection.csv``) and write the
-    chosen one's table against every specialist on every scenario (``out/evaluation.csv``)."""
+def _consolidate_args(cfg: dict, dirs: list[str], out_dir: str, settings: list) -> list[str]:
+    """``ernest consolidate`` over the specialists ``dirs`` into ``out_dir``, with ``settings``
+    (``key=value``, later ones win)."""
+    args = ["consolidate", *dirs, "--out", out_dir, "--preset", cfg["preset"],
+            "--set", "log.progress_bar=false"]
+    if "select" in cfg:
+        args.append("--no-eval")  # the chosen agent's table is written by the select stage
+    for a in settings:
+        args += ["--set", str(a)]
+    return args
+
+
+def _chosen_table(cfg: dict, chosen: str, log=print) -> None:
+    """The chosen agent against every specialist on every scenario (``out/evaluation.csv``)."""
     from .checkpoints import agent_from_checkpoint, load_checkpoint
     from .consolidate import evaluation_table
-    from .selection import select_policy
 
     out = cfg["out"]
-    chosen = select_policy(consolidation_dirs(cfg), cfg["select"], out, log)
-    # the chosen agent against every specialist on every scenario (consolidated/evaluation.csv)
     specialists = [load_checkpoint(os.path.join(out, n), with_buffer=False)
                    for n in cfg["specialists"]]
     ck = load_checkpoint(chosen, with_buffer=False)
     evaluation_table(agent_from_checkpoint(ck), specialists, ck["state"]["config"], out, log)
 
 
+def _select_stage(cfg: dict, log=print) -> None:
+    """Choose among the kept agents (``out/selected.json``, ``out/selection.csv``) and write the
+    chosen one's table against every specialist on every scenario (``out/evaluation.csv``)."""
+    from .selection import select_policy
+
+    _chosen_table(cfg, select_policy(consolidation_dirs(cfg), cfg["select"], cfg["out"], log), log)
+
+
 def _refine_stage(cfg: dict, dirs: list[str], chosen: str, log=print) -> None:
     """Continues the chosen agent on the pool (``refine.set``), then chooses among its kept agents
     and the chosen one on the validation episodes (``out/refined/selected.json``)."""
-    from .checkpoints import agent_from_checkpoint, load_checkpoint
-    from .consolidate import evaluation_table
     from .selection import select_policy
 
-    out = cfg["out"]
-    d = os.path.join(out, "refined")
+    d = os.path.join(cfg["out"], "refined")
     if not os.path.exists(os.path.join(d, "checkpoints", "LATEST")):
-        args = ["consolidate", *dirs, "--out", d, "--preset", cfg["preset"], "--no-eval",
-                "--set", "log.progress_bar=false", "--set", f"consolidate.init={chosen}"]
-        for a in cfg["consolidate"]["set"] + cfg["refine"]["set"]:  # refine's settings win
-            args += ["--set", str(a)]
+        settings = [f"consolidate.init={chosen}", *cfg["consolidate"]["set"],
+                    *cfg["refine"]["set"]]  # refine's settings win
         log(f"      refine {chosen} ({', '.join(cfg['refine']['set'])}; log {d}.log)")
-        _run(args, "refine", d + ".log")
-    final = select_policy([d], cfg["select"], d, log, extra=[chosen])
-    specialists = [load_checkpoint(os.path.join(out, n), with_buffer=False)
-                   for n in cfg["specialists"]]
-    ck = load_checkpoint(final, with_buffer=False)
-    evaluation_table(agent_from_checkpoint(ck), specialists, ck["state"]["config"], out, log)
+        _run(_consolidate_args(cfg, dirs, d, settings), "refine", d + ".log")
+    _chosen_table(cfg, select_policy([d], cfg["select"], d, log, extra=[chosen]), log)
 
 
 def _export(cfg: dict, consolidated: str) -> None:
+    from .export import ExportError, check_replaceable
+
     policy = cfg["policy"]
-    if os.path.lexists(policy) and not os.path.isfile(policy):  # a device, pipe or folder
-        raise RuntimeError(f"policy = {policy} exists and is not a regular file: not replaced")
+    try:
+        check_replaceable(policy)  # the final rename below must not replace a device or folder
+    except ExportError as exc:
+        raise RuntimeError(f"policy = {policy}: {exc}") from None
     tmp = policy + ".tmp.pt"
     _run(["export", consolidated, "--out", tmp], "export")
     _run(["stamp-policy", tmp], "stamp-policy")
