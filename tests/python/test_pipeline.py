@@ -173,6 +173,10 @@ def test_pipeline_resumes_an_interrupted_specialist(tmp_path):
     ({"select": {"seeds": [0, 10]}}, "must not overlap the reported seeds"),
     ({"select": {"seeds": [20, 10]}}, "select.seeds"),
     ({"select": {"slopes_deg": [20]}}, "other than the reported 20"),
+    ({"select": {"slopes_deg": [20], "slope_seeds": [5, 15]}}, "other than the reported 20"),
+    ({"select": {"slope_seeds": [3, 3]}}, "select.slope_seeds"),
+    ({"select": {"slope_spread_deg": -0.5}}, "slope_spread_deg"),
+    ({"select": {"slope_spread_deg": float("nan")}}, "slope_spread_deg"),
     ({"select": {"max_lateral": 0}}, "max_lateral"),
     ({"select": {"workers": 0}}, "workers"),
     ({"select": {"min_crossed": 1.5}}, "min_crossed"),
@@ -180,6 +184,21 @@ def test_pipeline_resumes_an_interrupted_specialist(tmp_path):
 def test_bad_pipeline_files_are_refused(tmp_path, over, match):
     with pytest.raises(ValueError, match=match):
         P.load_pipeline(_pipeline(tmp_path, **over))
+
+
+def test_held_out_slope_seeds_may_validate_on_the_reported_angle_distribution():
+    from ernest_cpp.rl.selection import check_select, validation_courses
+
+    sel = check_select({"slopes_deg": [20], "slope_seeds": [100, 103], "slope_spread_deg": 0.5})
+    slopes = [c for c in validation_courses(sel) if c[3] is None]
+    assert [c[0] for c in slopes] == ["slope 20 m90", "slope 20 wet_sand"]
+    for _, env_id, kwargs, _, seeds in slopes:
+        assert env_id == "ernest/SlopeEval-v0" and seeds == [100, 101, 102]
+        assert kwargs["randomisation"] == {"eval_slope_deg": 20.0, "eval_slope_spread_deg": 0.5}
+    # the default keeps the fixed angle and one episode per slope
+    default = [c for c in validation_courses(check_select({})) if c[3] is None]
+    assert all(c[4] == [0] and "eval_slope_spread_deg" not in c[2]["randomisation"]
+               for c in default)
 
 
 def test_the_committed_pipeline_file_is_valid():

@@ -6,8 +6,11 @@ thousand iterations earlier or later, or with another seed, may climb the step i
 seeds instead of seven (``policies/TRAINING.md``). The pipeline therefore keeps the agent every
 ``consolidate.keep_every`` iterations of each consolidation seed and picks one here, on episodes
 the reported evaluation never runs: the wheel-high step and the Bickler trap at seeds
-``select.seeds`` (the reports use 0-9) and the 20° slope course at other angles
-(``select.slopes_deg``), on dry M90 and wet sand.
+``select.seeds`` (the reports use 0-9) and the slope course at the angles ``select.slopes_deg``
+on dry M90 and wet sand, at seeds ``select.slope_seeds``, each seed drawing its angle within
+``select.slope_spread_deg`` of the nominal one (as the reports' 20 ± 0.5° ensembles do). With
+held-out slope seeds (10 or above) the validation may use the reported 20° ensemble's
+distribution; with seeds below 10 it must use other angles.
 
 Ranking: first the number of the controller's four targets a candidate meets on these
 episodes (all four wheels up the step in at least ``select.min_crossed`` of the episodes; across
@@ -41,34 +44,48 @@ def validation_courses(sel: dict) -> list[tuple[str, str, dict, str | None, list
     seeds = list(range(int(lo), int(hi)))
     out = [("step", "ernest/WheelStep-v0", {}, "step", seeds),
            ("trap", "ernest/BicklerTrap-v0", {}, "bickler", seeds)]
+    slope_seeds = list(range(*(int(v) for v in sel["slope_seeds"])))
     for deg in sel["slopes_deg"]:
+        rand = {"eval_slope_deg": float(deg)}
+        if sel["slope_spread_deg"] > 0:
+            rand["eval_slope_spread_deg"] = float(sel["slope_spread_deg"])
         for soil in SOILS:
             out.append((f"slope {deg:g} {soil}", "ernest/SlopeEval-v0",
-                        {"soil": soil, "randomisation": {"eval_slope_deg": float(deg)}}, None, [0]))
+                        {"soil": soil, "randomisation": dict(rand)}, None, slope_seeds))
     return out
+
+
+def _seed_range(out: dict, key: str) -> list[int]:
+    s = out[key]
+    if (not isinstance(s, list) or len(s) != 2 or not all(isinstance(v, int) for v in s)
+            or not 0 <= s[0] < s[1]):
+        raise ValueError(f"pipeline select.{key} = {s!r} must be [first, end) with 0 <= first < end")
+    return s
 
 
 def check_select(sel: dict) -> dict:
     """The ``select`` section with its defaults, validated."""
-    out = {"seeds": [100, 120], "slopes_deg": [18.0, 22.0], "max_lateral": 0.3,
-           "min_crossed": 0.8, "workers": 2}
+    out = {"seeds": [100, 120], "slopes_deg": [18.0, 22.0], "slope_seeds": [0, 1],
+           "slope_spread_deg": 0.0, "max_lateral": 0.3, "min_crossed": 0.8, "workers": 2}
     unknown = sorted(set(sel) - set(out))
     if unknown:
         raise ValueError(f"pipeline select: unknown key(s) {', '.join(unknown)}; known: "
                          f"{', '.join(sorted(out))}")
     out.update(sel)
-    s = out["seeds"]
-    if (not isinstance(s, list) or len(s) != 2 or not all(isinstance(v, int) for v in s)
-            or not 0 <= s[0] < s[1]):
-        raise ValueError(f"pipeline select.seeds = {s!r} must be [first, end) with 0 <= first < end")
+    s = _seed_range(out, "seeds")
     if not 10 <= s[0]:
         raise ValueError(f"pipeline select.seeds = {s!r} must not overlap the reported seeds "
                          f"0-9: start at 10 or above")
+    held_out = _seed_range(out, "slope_seeds")[0] >= 10
     d = out["slopes_deg"]
     if not isinstance(d, list) or not d or not all(
-            isinstance(v, (int, float)) and 0 < v <= 45 and v != 20 for v in d):
-        raise ValueError(f"pipeline select.slopes_deg = {d!r} must list angles in (0, 45] other "
-                         f"than the reported 20")
+            isinstance(v, (int, float)) and 0 < v <= 45 and (held_out or v != 20) for v in d):
+        raise ValueError(f"pipeline select.slopes_deg = {d!r} must list angles in (0, 45]"
+                         + ("" if held_out else " other than the reported 20 (or use "
+                            "select.slope_seeds of 10 or above)"))
+    sp = out["slope_spread_deg"]
+    if isinstance(sp, bool) or not isinstance(sp, (int, float)) or not 0 <= sp <= 5:
+        raise ValueError(f"pipeline select.slope_spread_deg = {sp!r} must be in [0, 5] [deg]")
     if not (isinstance(out["max_lateral"], (int, float)) and out["max_lateral"] > 0):
         raise ValueError(f"pipeline select.max_lateral = {out['max_lateral']!r} must be > 0 [m]")
     if not (isinstance(out["min_crossed"], (int, float)) and 0 < out["min_crossed"] <= 1):
