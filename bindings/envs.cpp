@@ -7,6 +7,7 @@
 #include "ernest/envs/rover_env.hpp"
 #include "ernest/envs/scenarios.hpp"
 #include "ernest/envs/vec_env.hpp"
+#include "exclusive.hpp"
 #include "interrupt.hpp"
 
 namespace py = pybind11;
@@ -52,6 +53,31 @@ Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> obstacle_rows(const Sc
         b.pitch, b.roll;
   }
   return o;
+}
+// What a RoverEnv call may touch: the env and the stereo pipeline it hands out (env.mapper and
+// env.mapper.map), so that a second thread is refused on any of them (exclusive.hpp).
+std::vector<const void*> env_objects(const RoverEnv& e) {
+  const perception::StereoMapper* m = e.mapper();
+  return {&e, m, m != nullptr ? static_cast<const void*>(&m->map()) : nullptr};
+}
+
+// A VecRoverEnv call touches every env (vec.env(i) hands them out) and what they hand out.
+std::vector<const void*> vec_objects(VecRoverEnv& v) {
+  std::vector<const void*> all{&v};
+  for (int i = 0; i < v.size(); ++i) {
+    const std::vector<const void*> e = env_objects(v.env(i));
+    all.insert(all.end(), e.begin(), e.end());
+  }
+  return all;
+}
+
+// A RoverEnv getter under the guard.
+template <class R>
+auto env_getter(const char* what, R (*f)(const RoverEnv&)) {
+  return [what, f](const RoverEnv& e) -> R {
+    const Busy busy(what, env_objects(e));
+    return f(e);
+  };
 }
 }  // namespace
 
@@ -163,12 +189,24 @@ void bind_envs(py::module_& m) {
 
   py::class_<RoverEnv>(m, "RoverEnv", "One ERNEST episode: scenario, simulator, sensing, reward.")
       .def(py::init<const dynamics::RoverParameters&, const EnvOptions&>(), "params"_a, "options"_a)
-      .def("reset", &RoverEnv::reset, "seed"_a, py::call_guard<py::gil_scoped_release>(),
+      .def("reset",
+           [](RoverEnv& e, std::uint64_t seed) {
+             const Busy busy("RoverEnv.reset", env_objects(e));
+             py::gil_scoped_release release;
+             return e.reset(seed);
+           },
+           "seed"_a,
            "New trial from a seed; returns the 45 observation values.")
-      .def("reset_next", &RoverEnv::reset_next, py::call_guard<py::gil_scoped_release>(),
+      .def("reset_next",
+           [](RoverEnv& e) {
+             const Busy busy("RoverEnv.reset_next", env_objects(e));
+             py::gil_scoped_release release;
+             return e.reset_next();
+           },
            "New trial with the next seed of the sequence started by reset(seed).")
       .def("step",
            [](RoverEnv& e, const sensing::ActionVector& action) {
+             const Busy busy("RoverEnv.step", env_objects(e));
              StepResult r;
              {
                py::gil_scoped_release release;
@@ -178,36 +216,44 @@ void bind_envs(py::module_& m) {
                                    result_info(r, e));
            },
            "action"_a, "One policy step: (obs, reward, terminated, truncated, info).")
-      .def_property_readonly("scenario", &RoverEnv::scenario, py::return_value_policy::reference_internal)
-      .def_property_readonly("metrics", [](const RoverEnv& e) {
+      .def_property_readonly("scenario",
+                             env_getter("RoverEnv.scenario", +[](const RoverEnv& e) -> const Scenario& {
+                               return e.scenario();
+                             }),
+                             py::return_value_policy::reference_internal)
+      .def_property_readonly("metrics", env_getter("RoverEnv.metrics", +[](const RoverEnv& e) {
         return metrics_dict(e.metrics(), e.parameters().total_mass());
-      })
+      }))
       .def_property_readonly("episode_seed", &RoverEnv::episode_seed)
       .def_property_readonly("done", &RoverEnv::done)
       .def_property_readonly("substeps", &RoverEnv::substeps)
-      .def_property_readonly("elevation", [](const RoverEnv& e) {
+      .def_property_readonly("elevation", env_getter("RoverEnv.elevation", +[](const RoverEnv& e) {
         return Eigen::VectorXd(e.elevation().values);
-      }, "last elevation samples [m]")
-      .def_property_readonly("elevation_points", [](const RoverEnv& e) {
+      }), "last elevation samples [m]")
+      .def_property_readonly("elevation_points", env_getter("RoverEnv.elevation_points", +[](const RoverEnv& e) {
         Eigen::Matrix<double, sensing::kElevationSamples, 2, Eigen::RowMajor> p;
         for (int k = 0; k < sensing::kElevationSamples; ++k) p.row(k) = e.sampler().point(k).transpose();
         return p;
-      }, "chassis-frame (x, y) of the 12 samples [m]")
-      .def_property_readonly("elevation_source", [](const RoverEnv& e) {
+      }), "chassis-frame (x, y) of the 12 samples [m]")
+      .def_property_readonly("elevation_source", env_getter("RoverEnv.elevation_source", +[](const RoverEnv& e) {
         return std::vector<int>(e.elevation().source.begin(), e.elevation().source.end());
-      }, "per sample: 0 measured, 1 interpolated, 2 extrapolated, 3 unknown (hole-filling of §4.2)")
+      }), "per sample: 0 measured, 1 interpolated, 2 extrapolated, 3 unknown (hole-filling of §4.2)")
       .def_property_readonly("mapper", &RoverEnv::mapper, py::return_value_policy::reference_internal,
                              "the episode's perception.StereoMapper (terrain_source 'stereo'), else None")
-      .def_property_readonly("fts", &RoverEnv::fts, "last processed force–torque values (4 x 6)")
-      .def_property_readonly("fts_bias", &RoverEnv::fts_bias)
-      .def_property_readonly("current_action", &RoverEnv::current_action)
-      .def_property_readonly("sim", [](const RoverEnv& e) {
+      .def_property_readonly("fts", env_getter("RoverEnv.fts", +[](const RoverEnv& e) { return e.fts(); }), "last processed force–torque values (4 x 6)")
+      .def_property_readonly("fts_bias", env_getter("RoverEnv.fts_bias", +[](const RoverEnv& e) { return e.fts_bias(); }))
+      .def_property_readonly("current_action", env_getter("RoverEnv.current_action", +[](const RoverEnv& e) {
+        return e.current_action();
+      }))
+      .def_property_readonly("sim", env_getter("RoverEnv.sim", +[](const RoverEnv& e) {
         if (!e.shared_sim()) throw std::logic_error("RoverEnv: call reset() first");
         return e.shared_sim();
-      }, "the episode's dynamics.RoverSim (shared): command and step it directly, e.g. with "
+      }), "the episode's dynamics.RoverSim (shared): command and step it directly, e.g. with "
          "dynamics.sync_commands to drive backwards (the action's V_x is 0..0.2 m/s); after the "
          "next reset() it is a detached simulator of the old episode")
-      .def_property_readonly("state", [](const RoverEnv& e) { return e.sim().state_copy(); },
+      .def_property_readonly("state", env_getter("RoverEnv.state", +[](const RoverEnv& e) {
+        return e.sim().state_copy();
+      }),
                              "ground truth of the rover: dynamics.RoverState (a copy), the type "
                              "RoverSim.state gives");
 
@@ -215,11 +261,18 @@ void bind_envs(py::module_& m) {
                           "N RoverEnv episodes stepped in parallel (next-step autoreset).")
       .def(py::init<const dynamics::RoverParameters&, const EnvOptions&, int, int>(), "params"_a,
            "options"_a, "num_envs"_a, "num_threads"_a)
-      .def("reset", &VecRoverEnv::reset, "seeds"_a,
-           py::call_guard<py::gil_scoped_release, interruptible>(),
+      .def("reset",
+           [](VecRoverEnv& v, const std::vector<std::uint64_t>& seeds) {
+             const Busy busy("VecRoverEnv.reset", vec_objects(v));
+             py::gil_scoped_release release;
+             interruptible scope;
+             return v.reset(seeds);
+           },
+           "seeds"_a,
            "Reset env i from seeds[i]; returns num_envs x 45 observations.")
       .def("step",
            [](VecRoverEnv& v, const Eigen::Ref<const ActionBatch>& actions) {
+             const Busy busy("VecRoverEnv.step", vec_objects(v));
              ObservationBatch obs(v.size(), sensing::kObservationSize);
              std::vector<StepResult> res;
              std::vector<char> was_reset;
@@ -249,7 +302,8 @@ void bind_envs(py::module_& m) {
            },
            "actions"_a,
            "One policy step of all envs (num_envs x 3): (obs, reward, terminated, truncated, info).")
-      .def("env", &VecRoverEnv::env, "i"_a, py::return_value_policy::reference_internal)
+      .def("env", guarded("VecRoverEnv.env", &VecRoverEnv::env), "i"_a,
+           py::return_value_policy::reference_internal)
       .def_property_readonly("size", &VecRoverEnv::size)
       .def_property_readonly("threads", &VecRoverEnv::threads);
 }

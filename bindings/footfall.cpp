@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "exclusive.hpp"
 #include "ernest/footfall/leg_collision.hpp"
 #include "ernest/footfall/leg_planner.hpp"
 #include "ernest/footfall/path_smoothing.hpp"
@@ -100,12 +101,12 @@ void bind_footfall(py::module_& m) {
            }),
            "model"_a, "terrain"_a, "body"_a, "q"_a, "leg"_a, "options"_a = StabilityMapOptions{},
            py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
-      .def("map", &StabilityMapper::map, py::call_guard<py::gil_scoped_release>(),
+      .def("map", guarded("StabilityMapper.map", &StabilityMapper::map), py::call_guard<py::gil_scoped_release>(),
            "The whole map over the leg's reach.")
-      .def("evaluate", &StabilityMapper::evaluate, "x"_a, "y"_a, "seed"_a,
+      .def("evaluate", guarded("StabilityMapper.evaluate", &StabilityMapper::evaluate), "x"_a, "y"_a, "seed"_a,
            py::call_guard<py::gil_scoped_release>(), "One ground point (world x, y).")
       .def_property_readonly("nesm", &StabilityMapper::nesm)
-      .def_property_readonly("start_above", &StabilityMapper::start_above)
+      .def_property_readonly("start_above", guarded("StabilityMapper.start_above", &StabilityMapper::start_above))
       .def_property_readonly("start_waypoint_reachable", &StabilityMapper::start_waypoint_reachable);
 
   py::class_<LegCollisionChecker>(m, "LegCollisionChecker",
@@ -116,12 +117,18 @@ void bind_footfall(py::module_& m) {
            }),
            "model"_a, "terrain"_a, "body"_a, "q"_a, "leg"_a, "options"_a = CollisionOptions{},
            py::keep_alive<1, 2>())
-      .def("valid", &LegCollisionChecker::valid, "q_leg"_a, "include_wheel"_a = true,
+      .def("valid", guarded("LegCollisionChecker.valid", &LegCollisionChecker::valid), "q_leg"_a, "include_wheel"_a = true,
            "Limits, self-collisions and the terrain (without the wheel when include_wheel is False).")
-      .def("motion_valid", &LegCollisionChecker::motion_valid, "a"_a, "b"_a, "epsilon"_a, "include_wheel"_a = true,
+      .def("motion_valid", guarded("LegCollisionChecker.motion_valid", &LegCollisionChecker::motion_valid), "a"_a, "b"_a, "epsilon"_a, "include_wheel"_a = true,
            "Straight edge a -> b by recursive bisection to epsilon [rad].")
       .def("checks", &LegCollisionChecker::checks, "Configurations checked so far.");
-  m.def("first_colliding_edge", &first_colliding_edge, "checker"_a, "path"_a, "resolution"_a,
+  m.def("first_colliding_edge",
+        [](LegCollisionChecker& checker, const Eigen::Ref<const Eigen::MatrixXd>& path, double resolution,
+           int wheel_free_edges) {
+          const Busy busy("first_colliding_edge", {&checker});
+          return first_colliding_edge(checker, path, resolution, wheel_free_edges);
+        },
+        "checker"_a, "path"_a, "resolution"_a,
         "wheel_free_edges"_a = 0, py::call_guard<py::gil_scoped_release>(),
         "Dense re-check of a path: index of the first colliding edge, or -1.");
 
@@ -146,9 +153,20 @@ void bind_footfall(py::module_& m) {
       .def(py::init<LegCollisionChecker&, const PlannerOptions&>(), "checker"_a, "options"_a = PlannerOptions{},
            py::keep_alive<1, 2>())
       .def_property_readonly("options", &LegPlanner::options)
-      .def("plan", &LegPlanner::plan, "start"_a, "goal"_a, py::call_guard<py::gil_scoped_release>(),
+      .def("plan",
+           [](LegPlanner& p, const Eigen::Ref<const Eigen::VectorXd>& start,
+              const Eigen::Ref<const Eigen::VectorXd>& goal) {
+             const Busy busy("LegPlanner.plan", {&p, &p.checker()});
+             return p.plan(start, goal);
+           },
+           "start"_a, "goal"_a, py::call_guard<py::gil_scoped_release>(),
            "Joint-space query (ValueError for NaN; NoPlan with the reason otherwise).")
-      .def("simplify_with_ompl", &LegPlanner::simplify_with_ompl, "path"_a,
+      .def("simplify_with_ompl",
+           [](LegPlanner& p, const Eigen::Ref<const Eigen::MatrixXd>& path) {
+             const Busy busy("LegPlanner.simplify_with_ompl", {&p, &p.checker()});
+             return p.simplify_with_ompl(path);
+           },
+           "path"_a,
            py::call_guard<py::gil_scoped_release>(), "OMPL's PathSimplifier.simplifyMax (reference).");
 
   py::class_<SmoothingOptions>(m, "SmoothingOptions", "Dijkstra–bisection smoothing (§3.4.2).")
@@ -165,7 +183,13 @@ void bind_footfall(py::module_& m) {
       .def_readonly("iterations", &SmoothingResult::iterations)
       .def_readonly("edge_checks", &SmoothingResult::edge_checks)
       .def_readonly("seconds", &SmoothingResult::seconds);
-  m.def("smooth_path", &smooth_path, "checker"_a, "path"_a, "options"_a = SmoothingOptions{},
+  m.def("smooth_path",
+        [](LegCollisionChecker& checker, const Eigen::Ref<const Eigen::MatrixXd>& path,
+           const SmoothingOptions& options) {
+          const Busy busy("smooth_path", {&checker});
+          return smooth_path(checker, path, options);
+        },
+        "checker"_a, "path"_a, "options"_a = SmoothingOptions{},
         py::call_guard<py::gil_scoped_release>(), "Fig. 4: Dijkstra over shortcuts, bisection, repeat.");
 
   py::class_<SwingSagOptions>(m, "SwingSagOptions", "Sag of the swing stance (§4.1, §5.1).")
@@ -243,7 +267,13 @@ void bind_footfall(py::module_& m) {
       .def("validate", &RockFieldOptions::validate, "Raise ValueError naming the field.");
   m.def("rock_field", &rock_field, "options"_a, "keep_clear"_a,
         "Height map of rocks on flat ground; none within keep_clear of the (2, k) points.");
-  m.def("sample_waypoints", &sample_waypoints, "mapper"_a, "map"_a, "checker"_a, "count"_a, "seed"_a,
+  m.def("sample_waypoints",
+        [](StabilityMapper& mapper, const StabilityMap& map, LegCollisionChecker& checker, int count,
+           std::uint32_t seed) {
+          const Busy busy("sample_waypoints", {&mapper, &checker});
+          return sample_waypoints(mapper, map, checker, count, seed);
+        },
+        "mapper"_a, "map"_a, "checker"_a, "count"_a, "seed"_a,
         py::call_guard<py::gil_scoped_release>(),
         "(joints, count) collision-free waypoints above random stable cells.");
   bind_footfall_terrain(m);  // the planner's DEM from the stereo map

@@ -4,6 +4,7 @@
 #include <pybind11/pybind11.h>
 
 #include "bindings.hpp"
+#include "exclusive.hpp"
 #include "ernest/footfall/terrain_map.hpp"
 
 namespace py = pybind11;
@@ -39,7 +40,9 @@ void bind_footfall_terrain(py::module_& m) {
       .def_readonly("top", &MapTerrain::top, "highest seen (raised) height [m]")
       .def("unknown_at", &MapTerrain::unknown_at, "x"_a, "y"_a, "Unknown (or outside) at (x, y).");
   m.def("terrain_from_map",
-        py::overload_cast<const perception::ElevationMap&, const MapTerrainOptions&>(&terrain_from_map), "map"_a,
+        guarded("terrain_from_map",
+                py::overload_cast<const perception::ElevationMap&, const MapTerrainOptions&>(&terrain_from_map)),
+        "map"_a,
         "options"_a = MapTerrainOptions{}, py::call_guard<py::gil_scoped_release>(),
         "The planner's DEM from a fused stereo ElevationMap; ValueError when nothing was seen.");
   m.def("terrain_from_arrays",

@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "exclusive.hpp"
 #include "pose.hpp"
 #include "ernest/perception/stereo_mapper.hpp"
 #include "interrupt.hpp"
@@ -135,7 +136,7 @@ void bind_perception(py::module_& m) {
 
   py::class_<StereoMatcher>(m, "StereoMatcher", "OpenCV stereo matcher (StereoBM by default).")
       .def(py::init<const StereoMatcherOptions&>(), "options"_a = StereoMatcherOptions{})
-      .def("compute", &StereoMatcher::compute, "left"_a, "right"_a,
+      .def("compute", guarded("StereoMatcher.compute", &StereoMatcher::compute), "left"_a, "right"_a,
            py::call_guard<py::gil_scoped_release>(),
            "Disparity [px] (float32, NaN = no match) of two uint8 images of equal size.")
       .def_property_readonly("options", &StereoMatcher::options);
@@ -176,19 +177,20 @@ void bind_perception(py::module_& m) {
   py::class_<ElevationMap, sensing::HeightSource>(
       m, "ElevationMap", "Robot-centric 2.5-D grid of heights and variances (NaN = hole).")
       .def(py::init<const ElevationMapOptions&>(), "options"_a = ElevationMapOptions{})
-      .def("move_to", &ElevationMap::move_to, "x"_a, "y"_a, "Centre the window on (x, y).")
+      .def("move_to", guarded("ElevationMap.move_to", &ElevationMap::move_to), "x"_a, "y"_a, "Centre the window on (x, y).")
       .def(
           "fuse_cloud",
           [](ElevationMap& map, const Eigen::Ref<const Points>& points, const Eigen::Matrix4d& pose,
              const StereoCameraParameters& camera) {
             const Eigen::Isometry3d p = to_isometry(pose, "camera_pose");
+            const Busy busy("ElevationMap.fuse_cloud", {&map});
             py::gil_scoped_release release;
             interruptible scope;  // Ctrl-C before any cell changes
             return map.fuse_cloud(points, p, camera);
           },
           "points"_a, "camera_pose"_a, "camera"_a,
           "Fuse camera-frame points [n, 3] seen from camera_pose (4 x 4) with the stereo noise model.")
-      .def("fuse_points", &ElevationMap::fuse_points, "points"_a, "variances"_a,
+      .def("fuse_points", guarded("ElevationMap.fuse_points", &ElevationMap::fuse_points), "points"_a, "variances"_a,
            py::call_guard<py::gil_scoped_release>(),
            "Fuse world points [n, 3] with height variances [n] (one measurement per cell per call).")
       .def("measurement_variance", &ElevationMap::measurement_variance, "p_cam"_a,
@@ -196,6 +198,7 @@ void bind_perception(py::module_& m) {
       .def(
           "height",
           [](const ElevationMap& map, double x, double y) {
+            const Busy busy("ElevationMap.height", {&map});
             double z = 0.0;
             const bool ok = map.height(x, y, z);
             return optional_height(ok, z);
@@ -204,21 +207,22 @@ void bind_perception(py::module_& m) {
       .def(
           "cell",
           [](const ElevationMap& map, double x, double y) {
+            const Busy busy("ElevationMap.cell", {&map});
             double z, v;
             map.cell(x, y, z, v);
             return py::make_tuple(z, v);
           },
           "x"_a, "y"_a, "(height, variance) of the cell holding (x, y); (nan, inf) for a hole.")
-      .def("clear", &ElevationMap::clear, "Make every cell a hole.")
-      .def_property_readonly("heights", &ElevationMap::heights,
+      .def("clear", guarded("ElevationMap.clear", &ElevationMap::clear), "Make every cell a hole.")
+      .def_property_readonly("heights", guarded("ElevationMap.heights", &ElevationMap::heights),
                              "[n, n], (i, j) at origin + (i, j) * resolution; NaN = hole")
-      .def_property_readonly("variances", &ElevationMap::variances, "[n, n] [m^2]; inf = hole")
-      .def_property_readonly("origin_x", &ElevationMap::origin_x, "[m]")
-      .def_property_readonly("origin_y", &ElevationMap::origin_y, "[m]")
+      .def_property_readonly("variances", guarded("ElevationMap.variances", &ElevationMap::variances), "[n, n] [m^2]; inf = hole")
+      .def_property_readonly("origin_x", guarded("ElevationMap.origin_x", &ElevationMap::origin_x), "[m]")
+      .def_property_readonly("origin_y", guarded("ElevationMap.origin_y", &ElevationMap::origin_y), "[m]")
       .def_property_readonly("cells", &ElevationMap::cells, "cells per side")
       .def_property_readonly("resolution", &ElevationMap::resolution, "[m]")
-      .def_property_readonly("skipped_empty", &ElevationMap::skipped_empty, "empty clouds skipped")
-      .def("consistent", &ElevationMap::consistent,
+      .def_property_readonly("skipped_empty", guarded("ElevationMap.skipped_empty", &ElevationMap::skipped_empty), "empty clouds skipped")
+      .def("consistent", guarded("ElevationMap.consistent", &ElevationMap::consistent),
            "True if every cell is a hole (NaN, inf) or known (finite, finite > 0).");
 
   py::class_<StereoMapperOptions>(m, "StereoMapperOptions", "Camera, renderer, matcher, map and rate.")
@@ -247,24 +251,36 @@ void bind_perception(py::module_& m) {
       .def(py::init<const dynamics::HeightMap&, const std::vector<dynamics::BoxObstacle>&,
                     const StereoMapperOptions&>(),
            "terrain"_a, "boxes"_a, "options"_a = StereoMapperOptions{})
-      .def("update", &StereoMapper::update, "time"_a, "chassis_position"_a, "chassis_rotation"_a,
-           py::call_guard<py::gil_scoped_release, interruptible>(),
+      .def("update",
+           [](StereoMapper& s, double time, const Eigen::Vector3d& p, const Eigen::Matrix3d& r) {
+             const Busy busy("StereoMapper.update", {&s, &s.map()});
+             py::gil_scoped_release release;
+             interruptible scope;
+             return s.update(time, p, r);
+           },
+           "time"_a, "chassis_position"_a, "chassis_rotation"_a,
            "Re-centre the map; capture and fuse if a fusion is due. Returns whether it fused.")
       .def(
           "capture",
           [](StereoMapper& s, const Eigen::Vector3d& p, const Eigen::Matrix3d& r) {
+            const Busy busy("StereoMapper.capture", {&s, &s.map()});
             py::gil_scoped_release release;
             interruptible scope;
             s.capture(p, r);
           },
           "chassis_position"_a, "chassis_rotation"_a, "Capture and fuse one frame now.")
-      .def("reset", &StereoMapper::reset, "Empty the map and the schedule.")
+      .def("reset",
+           [](StereoMapper& s) {
+             const Busy busy("StereoMapper.reset", {&s, &s.map()});
+             s.reset();
+           },
+           "Empty the map and the schedule.")
       .def_property_readonly("map", &StereoMapper::map, py::return_value_policy::reference_internal)
-      .def_property_readonly("last_frame", &StereoMapper::last_frame,
+      .def_property_readonly("last_frame", guarded("StereoMapper.last_frame", &StereoMapper::last_frame),
                              py::return_value_policy::reference_internal)
       .def_property_readonly("raycaster", &StereoMapper::raycaster,
                              py::return_value_policy::reference_internal)
-      .def_property_readonly("frames", &StereoMapper::frames, "frames fused so far");
+      .def_property_readonly("frames", guarded("StereoMapper.frames", &StereoMapper::frames), "frames fused so far");
 
   bind_perception_selfimage(m);  // the walker's self-imaging (seed 003 §4.3, §5.2)
 }

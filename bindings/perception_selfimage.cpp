@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "exclusive.hpp"
 #include "pose.hpp"
 #include "ernest/perception/self_image.hpp"
 #include "ernest/perception/self_scene.hpp"
@@ -111,7 +112,8 @@ void bind_perception_selfimage(py::module_& m) {
   py::class_<SelfImageSegmenter>(m, "SelfImageSegmenter", "Watershed removal of the raised leg (§5.2).")
       .def(py::init<const SelfImageOptions&>(), "options"_a = SelfImageOptions{})
       .def("segment",
-           py::overload_cast<const FloatImage&, const StereoCameraParameters&>(&SelfImageSegmenter::segment),
+           guarded("SelfImageSegmenter.segment",
+                   py::overload_cast<const FloatImage&, const StereoCameraParameters&>(&SelfImageSegmenter::segment)),
            "depth"_a, "camera"_a, py::call_guard<py::gil_scoped_release>(),
            "Segment a depth map [m] (+inf = no return) of the camera's size; ValueError on NaN, "
            "z <= 0 or a wrong size.")

@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "exclusive.hpp"
 #include "ernest/sensing/elevation_sampler.hpp"
 #include "ernest/sensing/fts_processor.hpp"
 #include "ernest/sensing/observation.hpp"
@@ -101,6 +102,8 @@ void bind_sensing(py::module_& m) {
       .def("sample",
            [](const ElevationSampler& s, const Eigen::Vector3d& position,
               const Eigen::Matrix3d& rotation, const HeightSource& source) {
+             // the source may be an ElevationMap another thread is fusing into (exclusive.hpp)
+             const Busy busy("ElevationSampler.sample", {dynamic_cast<const void*>(&source)});
              const ElevationSample e = s.sample(position, rotation, source);
              return py::make_tuple(Eigen::VectorXd(e.values),
                                    std::vector<int>(e.source.begin(), e.source.end()));

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "exclusive.hpp"
 #include "pose.hpp"
 #include "ernest/walker/leg_ik.hpp"
 #include "ernest/walker/self_collision.hpp"
@@ -233,6 +234,7 @@ void bind_walker(py::module_& m) {
       .def("solve",
            [](LegIk& ik, int leg, const Eigen::Matrix4d& target, const Eigen::VectorXd& seed) {
              const Eigen::Isometry3d t = to_isometry(target, "target");
+             const Busy busy("LegIk.solve", {&ik});
              py::gil_scoped_release release;
              return ik.solve(leg, t, seed);
            },
@@ -244,6 +246,7 @@ void bind_walker(py::module_& m) {
              const Eigen::Isometry3d t = to_isometry(target, "target");
              Eigen::VectorXd q(seed.size());
              bool ok;
+             const Busy busy("LegIk.solve_from", {&ik});
              {
                py::gil_scoped_release release;
                ok = ik.solve_from(leg, t, seed, q);
@@ -251,9 +254,9 @@ void bind_walker(py::module_& m) {
              return py::make_tuple(ok, q);
            },
            "leg"_a, "target"_a, "seed"_a, "One local solve from `seed`: (converged, q).")
-      .def("last_position_error", &LegIk::last_position_error, "[m]")
-      .def("last_orientation_error", &LegIk::last_orientation_error, "[rad]")
-      .def("last_evaluations", &LegIk::last_evaluations);
+      .def("last_position_error", guarded("LegIk.last_position_error", &LegIk::last_position_error), "[m]")
+      .def("last_orientation_error", guarded("LegIk.last_orientation_error", &LegIk::last_orientation_error), "[rad]")
+      .def("last_evaluations", guarded("LegIk.last_evaluations", &LegIk::last_evaluations));
 
   // ---- weight distribution (Fig. 16) and the sway gait (Fig. 15) ------------------------------
   py::class_<StanceLoads>(m, "StanceLoads",

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "bindings.hpp"
+#include "exclusive.hpp"
 #include "ernest/walker_sim/footfall_cycle.hpp"
 #include "ernest/walker_sim/gait_execution.hpp"
 #include "ernest/walker_sim/rock_map.hpp"
@@ -55,7 +56,8 @@ void bind_walker_sim(py::module_& m) {
       .def("validate", &WalkerSimOptions::validate, "Raise ValueError naming the first invalid field.");
 
   py::class_<WalkerSim>(m, "WalkerSim",
-                        "The walker in ODE over flat ground with box rocks. Not thread-safe.")
+                        "The walker in ODE over flat ground with box rocks. One thread at a time (a second "
+                        "gets RuntimeError).")
       .def(py::init([](const walker::WalkerModel& model, const Eigen::Matrix4d& body, const Eigen::MatrixXd& q,
                        const std::vector<Rock>& rocks, const WalkerSimOptions& options) {
              return std::make_unique<WalkerSim>(model, to_isometry(body, "body"), q, rocks, options);
@@ -64,19 +66,23 @@ void bind_walker_sim(py::module_& m) {
            py::keep_alive<1, 2>(), "Build the robot at body pose `body` and configuration q (joints × legs).")
       .def_property_readonly("options", &WalkerSim::options)
       .def_property_readonly("rocks", &WalkerSim::rocks)
-      .def_property_readonly("time", &WalkerSim::time, "[s]")
-      .def("step", &WalkerSim::step, "q_target"_a, "rate"_a = Eigen::MatrixXd(),
+      .def_property_readonly("time", guarded("WalkerSim.time", &WalkerSim::time), "[s]")
+      .def("step", guarded("WalkerSim.step", &WalkerSim::step), "q_target"_a, "rate"_a = Eigen::MatrixXd(),
            py::call_guard<py::gil_scoped_release>(),
            "One physics step towards q_target with feed-forward joint rates; raises WalkerSimDiverged.")
-      .def("hold", &WalkerSim::hold, "q_target"_a, "seconds"_a, py::call_guard<py::gil_scoped_release>(),
+      .def("hold", guarded("WalkerSim.hold", &WalkerSim::hold), "q_target"_a, "seconds"_a, py::call_guard<py::gil_scoped_release>(),
            "Hold the targets for `seconds`.")
-      .def("body_pose", [](const WalkerSim& s) { return mat(s.body_pose()); }, "Chassis frame, 4 × 4.")
-      .def("joint_angles", &WalkerSim::joint_angles, "Measured joints × legs [rad].")
-      .def("wheel_centres", &WalkerSim::wheel_centres, "3 × legs [m].")
-      .def("wheel_axles", &WalkerSim::wheel_axles, "3 × legs.")
-      .def("wheel_loads", &WalkerSim::wheel_loads, "Normal force of each wheel's spring [N].")
-      .def("rock_clearance", &WalkerSim::rock_clearance, "leg"_a, "Wheel to nearest rock [m] (< 0 overlap).")
-      .def("ground_clearance", &WalkerSim::ground_clearance, "leg"_a, "Wheel's lowest point over z = 0 [m].");
+      .def("body_pose",
+           [](const WalkerSim& s) {
+             const Busy busy("WalkerSim.body_pose", {&s});
+             return mat(s.body_pose());
+           }, "Chassis frame, 4 × 4.")
+      .def("joint_angles", guarded("WalkerSim.joint_angles", &WalkerSim::joint_angles), "Measured joints × legs [rad].")
+      .def("wheel_centres", guarded("WalkerSim.wheel_centres", &WalkerSim::wheel_centres), "3 × legs [m].")
+      .def("wheel_axles", guarded("WalkerSim.wheel_axles", &WalkerSim::wheel_axles), "3 × legs.")
+      .def("wheel_loads", guarded("WalkerSim.wheel_loads", &WalkerSim::wheel_loads), "Normal force of each wheel's spring [N].")
+      .def("rock_clearance", guarded("WalkerSim.rock_clearance", &WalkerSim::rock_clearance), "leg"_a, "Wheel to nearest rock [m] (< 0 overlap).")
+      .def("ground_clearance", guarded("WalkerSim.ground_clearance", &WalkerSim::ground_clearance), "leg"_a, "Wheel's lowest point over z = 0 [m].");
 
   m.def("wheel_rock_clearance", &wheel_rock_clearance, "centre"_a, "axle"_a, "radius"_a, "width"_a, "rock"_a,
         "Signed distance of a cylindrical wheel to a box rock [m] (FCL).");
@@ -122,11 +128,11 @@ void bind_walker_sim(py::module_& m) {
       .def_readonly("final_q", &ExecutionTrace::final_q)
       .def_readonly("simulated_seconds", &ExecutionTrace::simulated_seconds)
       .def_readonly("wall_seconds", &ExecutionTrace::wall_seconds);
-  m.def("execute_joint_path", &execute_joint_path, "sim"_a, "leg"_a, "stance"_a, "path"_a,
+  m.def("execute_joint_path", guarded("execute_joint_path", &execute_joint_path), "sim"_a, "leg"_a, "stance"_a, "path"_a,
         "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release>(),
         "Execute a joint path of `leg` (other legs held at `stance`) and trace its clearances.");
 
-  m.def("execute_configuration_path", &execute_configuration_path, "sim"_a, "leg"_a, "path"_a,
+  m.def("execute_configuration_path", guarded("execute_configuration_path", &execute_configuration_path), "sim"_a, "leg"_a, "path"_a,
         "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release>(),
         "Execute whole-robot configurations (every leg at once); trace wheel `leg` (-1: none).");
 
@@ -139,7 +145,7 @@ void bind_walker_sim(py::module_& m) {
       .def_readonly("planned_advance", &GaitExecution::planned_advance, "[m]")
       .def_readonly("simulated_seconds", &GaitExecution::simulated_seconds)
       .def_readonly("wall_seconds", &GaitExecution::wall_seconds);
-  m.def("execute_gait_cycle", &execute_gait_cycle, "sim"_a, "plan"_a, "cycle"_a, "options"_a = ExecutionOptions{},
+  m.def("execute_gait_cycle", guarded("execute_gait_cycle", &execute_gait_cycle), "sim"_a, "plan"_a, "cycle"_a, "options"_a = ExecutionOptions{},
         py::call_guard<py::gil_scoped_release>(),
         "Execute cycle `cycle` of a walker.GaitPlan (steps through the compliance waypoints, shifts).");
 

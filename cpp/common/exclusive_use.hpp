@@ -15,15 +15,19 @@ class ConcurrentUse : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The error every one-thread-at-a-time guard raises (here and bindings/exclusive.hpp).
+inline ConcurrentUse concurrent_use(const char* what) {
+  return ConcurrentUse(std::string(what) +
+                       ": the object is in use by another thread; use one object per thread "
+                       "or serialise the calls with a lock");
+}
+
 /// RAII try-lock on an atomic flag: throws ConcurrentUse naming `what` if the flag is already
 /// held. Not re-entrant (a method holding it must not call another guarded method).
 class ExclusiveUse {
  public:
   ExclusiveUse(std::atomic<bool>& flag, const char* what) : flag_(flag) {
-    if (flag_.exchange(true, std::memory_order_acquire))
-      throw ConcurrentUse(std::string(what) +
-                          ": the object is in use by another thread; use one object per thread "
-                          "or serialise the calls with a lock");
+    if (flag_.exchange(true, std::memory_order_acquire)) throw concurrent_use(what);
   }
   ~ExclusiveUse() { flag_.store(false, std::memory_order_release); }
   ExclusiveUse(const ExclusiveUse&) = delete;

@@ -51,6 +51,7 @@ class LegPlanner {
   LegPlanner(LegCollisionChecker& checker, const PlannerOptions& options = {});
   ~LegPlanner();
   const PlannerOptions& options() const { return options_; }
+  LegCollisionChecker& checker() const { return checker_; }
   /// Joint-space query. NaN or wrongly sized input throws std::invalid_argument; an invalid
   /// start or goal (limits, collision) or no path within the budget gives kNoPlan with the reason.
   PlanResult plan(const Eigen::Ref<const Eigen::VectorXd>& start, const Eigen::Ref<const Eigen::VectorXd>& goal);

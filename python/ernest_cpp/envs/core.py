@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import numbers
+import threading
 from typing import Any
 
 import gymnasium as gym
@@ -18,6 +20,19 @@ SCENARIO_ALIASES = {
     "slope": "slope", "bickler": "bickler", "bickler_trap": "bickler", "slope_eval": "slope_eval",
     "wheel_step": "wheel_step", "course": "course", "flat": "flat",
 }
+
+
+@contextlib.contextmanager
+def _one_thread(lock: threading.Lock, what: str):
+    """Refuse a second thread instead of waiting, as the C++ objects do: a reset interleaved
+    with a step would leave the step's history and info from two episodes."""
+    if not lock.acquire(blocking=False):
+        raise RuntimeError(f"{what}: the environment is in use by another thread; use one "
+                           "environment per thread or serialise the calls with a lock")
+    try:
+        yield
+    finally:
+        lock.release()
 
 
 def _flag(name: str, value) -> bool:
@@ -144,9 +159,14 @@ class ErnestEnv(gym.Env):
         self.observation_layout = observation_layout(self.options)
         self._started = False
         self.history: list[dict] = []  # per-step ground truth for plots (cleared at reset)
+        self._busy = threading.Lock()  # step/reset/render: one thread at a time
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         check_reset_options(options)
+        with _one_thread(self._busy, "ErnestEnv.reset"):
+            return self._reset(seed)
+
+    def _reset(self, seed):
         super().reset(seed=seed)
         if seed is not None:
             obs = self.core.reset(int(seed))
@@ -168,6 +188,10 @@ class ErnestEnv(gym.Env):
                       _options=state["options"])
 
     def step(self, action):
+        with _one_thread(self._busy, "ErnestEnv.step"):
+            return self._step(action)
+
+    def _step(self, action):
         if not self._started:
             raise RuntimeError("ErnestEnv.step: call reset() first")
         a = np.asarray(action, dtype=np.float64).reshape(-1)
@@ -194,7 +218,8 @@ class ErnestEnv(gym.Env):
             return None
         from .render import render_frame
 
-        return render_frame(self)
+        with _one_thread(self._busy, "ErnestEnv.render"):
+            return render_frame(self)
 
     # convenient accessors
     @property
