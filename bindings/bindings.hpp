@@ -22,4 +22,6 @@ void bind_perception(pybind11::module_& m);
 void bind_perception_selfimage(pybind11::module_& m);  // part of bind_perception (bindings/perception_selfimage.cpp)
 void bind_footfall(pybind11::module_& m);
 void bind_footfall_terrain(pybind11::module_& m);  // part of bind_footfall (bindings/footfall_terrain.cpp)
+// A readable __repr__ for every bound class of `core` that has none (bindings/repr.cpp); call last.
+void add_reprs(pybind11::module_& core);
 }  // namespace ernest::bindings

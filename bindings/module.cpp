@@ -37,4 +37,5 @@ PYBIND11_MODULE(_core, m) {
   auto footfall = m.def_submodule(
       "footfall", "FootFall single-leg planning: stability maps, OMPL SBL, smoothing, sag (seed 003)");
   ernest::bindings::bind_footfall(footfall);
+  ernest::bindings::add_reprs(m);
 }
