@@ -13,6 +13,17 @@ import numpy as np
 
 from .._core import dynamics as _dyn
 from .._core import envs as _envs
+from .._core.envs import (  # noqa: F401  (re-exports: the C++ episode core, typed in core.pyi)
+    EnvOptions,
+    RippleSpec,
+    RoverEnv,
+    Scenario,
+    ScenarioOptions,
+    VecRoverEnv,
+    generate_scenario,
+    ripple_height,
+    scenario_names,
+)
 from .. import sensing
 
 SCENARIO_ALIASES = {

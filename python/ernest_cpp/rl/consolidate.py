@@ -19,7 +19,7 @@ import numpy as np
 import torch
 
 from . import layout as L
-from .._core.sensing import RewardWeights
+from ..sensing import RewardWeights as _RewardWeights
 from .replay import ReplayBuffer
 from .storage import AtomicDir
 from .td3 import TD3, TD3Config, resolve_device
@@ -27,7 +27,7 @@ from .checkpoints import agent_from_checkpoint, find_checkpoint, load_checkpoint
 from .envs_util import evaluate, make_env, noise_for
 
 
-DEFAULT_W_DELTA = RewardWeights().w_delta  # eq 38's lateral weight where no env set another
+DEFAULT_W_DELTA = _RewardWeights().w_delta  # eq 38's lateral weight where no env set another
 
 
 def relabel_lateral(buf: ReplayBuffer, index: int, scale: float, w_from: float,
