@@ -98,3 +98,29 @@ def test_every_seed_option_names_itself_and_its_range(capsys, command, seed, mes
         cli.main(command + ["--seed", seed])
     assert exc.value.code == 2
     assert f"argument --seed: {message}" in capsys.readouterr().err
+
+
+def test_print_config_prints_the_resolved_settings_and_trains_nothing(tmp_path, capsys):
+    import yaml
+
+    run = tmp_path / "run"
+    assert cli.main(["train", "--scenario", "step", "--preset", "paper", "--seed", "3",
+                     "--set", "td3.batch_size=64", "--run-dir", str(run), "--print-config"]) == 0
+    cfg = yaml.safe_load(capsys.readouterr().out)
+    assert cfg["env"]["scenario"] == "step" and cfg["seed"] == 3
+    assert cfg["td3"]["batch_size"] == 64 and "consolidate" in cfg  # the whole settings tree
+    assert not run.exists()
+
+
+def test_resume_with_no_more_steps_than_done_names_both_counts(tmp_path, capsys):
+    run = str(tmp_path / "run")
+    quick = ["--set", "log.progress_bar=false", "--set", "log.tensorboard=false",
+             "--set", "eval.every_steps=0", "--set", "random_steps=50",
+             "--set", "learning_starts=50", "--set", "td3.hidden=16"]
+    assert cli.main(["train", "--env", POINT_MASS, "--run-dir", run, "--steps", "200"] + quick) == 0
+    capsys.readouterr()
+    for extra, given in ((["--steps", "150"], "--steps 150"),
+                         (["--set", "total_steps=100"], "--set total_steps=100"),
+                         ([], "total_steps 200 (the run's saved settings)")):
+        assert cli.main(["train", "--run-dir", run, "--resume", *extra]) == 2
+        _one_line_error(capsys, given, "has done 200 transitions already", "--steps above 200")

@@ -54,6 +54,21 @@ def _build(args, extra: dict | None = None) -> dict:
     return merge(cfg, extra) if extra else cfg
 
 
+def _check_more_steps(total, done: int, args) -> None:
+    """A resumed run must be given more transitions than it has done: fewer or as many would
+    end at once without training."""
+    if int(total) > done:
+        return
+    if args.steps is not None:
+        where = f"--steps {args.steps}"
+    elif any(o.strip().startswith("total_steps") for o in args.set):
+        where = f"--set total_steps={total}"
+    else:
+        where = f"total_steps {total} (the run's saved settings)"
+    raise ValueError(f"{where}: the run in {args.run_dir} has done {done} transitions already; "
+                     f"give --steps above {done} to continue")
+
+
 def _train(args) -> int:
     _passive_openmp()
     from .envs_util import resolve_env_id
@@ -88,9 +103,6 @@ def _train(args) -> int:
                              "change one")
         ck = load_checkpoint(args.run_dir, with_buffer=False)
         state = ck["state"]
-        if args.steps is not None and args.steps <= state["step"]:
-            raise ValueError(f"--steps {args.steps}: the run in {args.run_dir} has done "
-                             f"{state['step']} transitions already; give more to continue")
         # Settings newer than the run (ray, learner_device, demos) get the quick preset's values,
         # which --set may then change; a run from before learner_device learned on the CPU.
         cfg = saved_settings(state["config"])
@@ -98,6 +110,7 @@ def _train(args) -> int:
             cfg = merge(cfg, extra)
         for o in args.set:
             cfg = merge(cfg, parse_assignment(o))
+        _check_more_steps(cfg["total_steps"], state["step"], args)
     else:
         if args.override_config:
             raise ValueError("--override-config applies to --resume only")
