@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "interrupt.hpp"
 #include "exclusive.hpp"
 #include "ernest/footfall/leg_collision.hpp"
 #include "ernest/footfall/leg_planner.hpp"
@@ -101,10 +102,10 @@ void bind_footfall(py::module_& m) {
            }),
            "model"_a, "terrain"_a, "body"_a, "q"_a, "leg"_a, "options"_a = StabilityMapOptions{},
            py::keep_alive<1, 2>(), py::keep_alive<1, 3>())
-      .def("map", guarded("StabilityMapper.map", &StabilityMapper::map), py::call_guard<py::gil_scoped_release>(),
+      .def("map", guarded("StabilityMapper.map", &StabilityMapper::map), py::call_guard<py::gil_scoped_release, interruptible>(),
            "The whole map over the leg's reach.")
       .def("evaluate", guarded("StabilityMapper.evaluate", &StabilityMapper::evaluate), "x"_a, "y"_a, "seed"_a,
-           py::call_guard<py::gil_scoped_release>(), "One ground point (world x, y).")
+           py::call_guard<py::gil_scoped_release, interruptible>(), "One ground point (world x, y).")
       .def_property_readonly("nesm", &StabilityMapper::nesm)
       .def_property_readonly("start_above", guarded("StabilityMapper.start_above", &StabilityMapper::start_above))
       .def_property_readonly("start_waypoint_reachable", &StabilityMapper::start_waypoint_reachable);
@@ -129,7 +130,7 @@ void bind_footfall(py::module_& m) {
           return first_colliding_edge(checker, path, resolution, wheel_free_edges);
         },
         "checker"_a, "path"_a, "resolution"_a,
-        "wheel_free_edges"_a = 0, py::call_guard<py::gil_scoped_release>(),
+        "wheel_free_edges"_a = 0, py::call_guard<py::gil_scoped_release, interruptible>(),
         "Dense re-check of a path: index of the first colliding edge, or -1.");
 
   py::class_<PlannerOptions>(m, "PlannerOptions", "Single-leg planner options (§3.4.1).")
@@ -159,7 +160,7 @@ void bind_footfall(py::module_& m) {
              const Busy busy("LegPlanner.plan", {&p, &p.checker()});
              return p.plan(start, goal);
            },
-           "start"_a, "goal"_a, py::call_guard<py::gil_scoped_release>(),
+           "start"_a, "goal"_a, py::call_guard<py::gil_scoped_release, interruptible>(),
            "Joint-space query (ValueError for NaN; NoPlan with the reason otherwise).")
       .def("simplify_with_ompl",
            [](LegPlanner& p, const Eigen::Ref<const Eigen::MatrixXd>& path) {
@@ -167,7 +168,7 @@ void bind_footfall(py::module_& m) {
              return p.simplify_with_ompl(path);
            },
            "path"_a,
-           py::call_guard<py::gil_scoped_release>(), "OMPL's PathSimplifier.simplifyMax (reference).");
+           py::call_guard<py::gil_scoped_release, interruptible>(), "OMPL's PathSimplifier.simplifyMax (reference).");
 
   py::class_<SmoothingOptions>(m, "SmoothingOptions", "Dijkstra–bisection smoothing (§3.4.2).")
       .def(py::init<>())
@@ -190,7 +191,7 @@ void bind_footfall(py::module_& m) {
           return smooth_path(checker, path, options);
         },
         "checker"_a, "path"_a, "options"_a = SmoothingOptions{},
-        py::call_guard<py::gil_scoped_release>(), "Fig. 4: Dijkstra over shortcuts, bisection, repeat.");
+        py::call_guard<py::gil_scoped_release, interruptible>(), "Fig. 4: Dijkstra over shortcuts, bisection, repeat.");
 
   py::class_<SwingSagOptions>(m, "SwingSagOptions", "Sag of the swing stance (§4.1, §5.1).")
       .def(py::init<>())
@@ -211,6 +212,7 @@ void bind_footfall(py::module_& m) {
            const SwingSagOptions& options) {
           const Eigen::Isometry3d b = body_pose(body);
           py::gil_scoped_release release;
+          interruptible scope;
           return predict_swing_sag(model, b, q, leg, options);
         },
         "model"_a, "body"_a, "q"_a, "leg"_a, "options"_a = SwingSagOptions{},
@@ -245,6 +247,7 @@ void bind_footfall(py::module_& m) {
            const Eigen::MatrixXd& q, int leg, double goal_x, double goal_y, const StepOptions& options) {
           const Eigen::Isometry3d b = body_pose(body);
           py::gil_scoped_release release;
+          interruptible scope;
           return plan_step(model, terrain, b, q, leg, goal_x, goal_y, options);
         },
         "model"_a, "terrain"_a, "body"_a, "q"_a, "leg"_a, "goal_x"_a, "goal_y"_a, "options"_a = StepOptions{},
@@ -274,7 +277,7 @@ void bind_footfall(py::module_& m) {
           return sample_waypoints(mapper, map, checker, count, seed);
         },
         "mapper"_a, "map"_a, "checker"_a, "count"_a, "seed"_a,
-        py::call_guard<py::gil_scoped_release>(),
+        py::call_guard<py::gil_scoped_release, interruptible>(),
         "(joints, count) collision-free waypoints above random stable cells.");
   bind_footfall_terrain(m);  // the planner's DEM from the stereo map
 }

@@ -7,6 +7,7 @@
 
 #include "bindings.hpp"
 #include "exclusive.hpp"
+#include "interrupt.hpp"
 #include "pose.hpp"
 #include "ernest/perception/self_image.hpp"
 #include "ernest/perception/self_scene.hpp"
@@ -66,6 +67,7 @@ void bind_perception_selfimage(py::module_& m) {
         SelfImageFrame f;
         {
           py::gil_scoped_release release;
+          interruptible scope;
           render_with_robot(scene, solids, p, camera, options, frame, f);
         }
         return py::make_tuple(f.image, f.depth, f.labels);

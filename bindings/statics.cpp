@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "interrupt.hpp"
 #include "ernest/statics/calibration.hpp"
 #include "ernest/statics/force_distribution.hpp"
 #include "ernest/statics/sag.hpp"
@@ -269,7 +270,7 @@ void bind_sag(py::module_& m) {
       });
 
   m.def("solve_sag", &solve_sag, "problem"_a, "options"_a = SagOptions{},
-        py::call_guard<py::gil_scoped_release>(),
+        py::call_guard<py::gil_scoped_release, interruptible>(),
         "Solve one stance of the sag model (eqs 4–8 by Levenberg–Marquardt, eqs 9–12 contact).");
 }
 
@@ -310,7 +311,7 @@ void bind_calibration(py::module_& m) {
       .def_readonly("lm_status", &PerFootCalibrationResult::lm_status,
                     "Eigen LevenbergMarquardt status (1–4: converged)");
   m.def("calibrate_per_foot_constants", &calibrate_per_foot_constants, "stances"_a,
-        "k_initial"_a, "options"_a = SagOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "k_initial"_a, "options"_a = SagOptions{}, py::call_guard<py::gil_scoped_release, interruptible>(),
         "One constant per foot (§5.1.4, unequal tyres) by Levenberg–Marquardt on the height "
         "errors over log k, from k_initial.");
   m.def(
@@ -318,10 +319,10 @@ void bind_calibration(py::module_& m) {
       [](const std::vector<CalibrationStance>& stances, double k, const SagOptions& options) {
         return mean_height_error(stances, k, options);
       },
-      "stances"_a, "k"_a, "options"_a = SagOptions{}, py::call_guard<py::gil_scoped_release>(),
+      "stances"_a, "k"_a, "options"_a = SagOptions{}, py::call_guard<py::gil_scoped_release, interruptible>(),
       "Mean absolute height error [m] of the stances with spring constant k.");
   m.def("calibrate_spring_constant", &calibrate_spring_constant, "stances"_a,
-        "options"_a = CalibrationOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "options"_a = CalibrationOptions{}, py::call_guard<py::gil_scoped_release, interruptible>(),
         "Spring constant minimising the mean height error (§5.1.3): exhaustive search, then "
         "Brent.");
 }

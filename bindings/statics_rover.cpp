@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "interrupt.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/statics/liftoff.hpp"
 #include "ernest/statics/load_survey.hpp"
@@ -108,7 +109,7 @@ void bind_statics_rover(py::module_& m) {
       .def_readonly("converged", &MassFitResult::converged)
       .def_readonly("status", &MassFitResult::status);
   m.def("fit_mass_model", &fit_mass_model, "poses"_a, "geometry"_a, "initial"_a = MassModel{},
-        "options"_a = MassFitOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "options"_a = MassFitOptions{}, py::call_guard<py::gil_scoped_release, interruptible>(),
         "Fit (m_c, m_b, x_c, y_c, z_c, z_b) to the poses' loads by Levenberg–Marquardt (seed 004 "
         "eq 11; Eigen's LM, analytic Jacobian); uncertainty from the Jacobian at the optimum.");
 
@@ -125,7 +126,7 @@ void bind_statics_rover(py::module_& m) {
       .def_readwrite("friction", &SurveyOptions::friction)
       .def("validate", &SurveyOptions::validate, "Raise ValueError naming the first invalid field.");
   m.def("survey_loads", &survey_loads, "params"_a, "options"_a = SurveyOptions{},
-        py::call_guard<py::gil_scoped_release>(),
+        py::call_guard<py::gil_scoped_release, interruptible>(),
         "Settle the simulated rover in each survey pose (AGS off, clutch open, rigid ground) and "
         "read each wheel's vertical ground force from its force–torque sensor (§3.2, Fig. 6).");
 

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "interrupt.hpp"
 #include "exclusive.hpp"
 #include "pose.hpp"
 #include "ernest/walker/leg_ik.hpp"
@@ -331,10 +332,10 @@ void bind_walker(py::module_& m) {
       .def_readonly("evaluations", &SwayGaitResult::evaluations)
       .def_readonly("seconds", &SwayGaitResult::seconds);
   m.def("evaluate_gait_phase", &evaluate_gait_phase, "model"_a, "options"_a, "phase"_a,
-        "displacement"_a, py::call_guard<py::gil_scoped_release>(),
+        "displacement"_a, py::call_guard<py::gil_scoped_release, interruptible>(),
         "Step `phase` of the periodic gait with the body displaced by `displacement` [m].");
   m.def("optimise_sway_gait", &optimise_sway_gait, "model"_a, "options"_a = SwayGaitOptions{},
-        py::call_guard<py::gil_scoped_release>(),
+        py::call_guard<py::gil_scoped_release, interruptible>(),
         "Reference gait and the sway gait maximising the margin to saturation at every step.");
   bind_walker_gait(m);
 }

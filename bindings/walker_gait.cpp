@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "interrupt.hpp"
 #include "ernest/walker/gait_planner.hpp"
 
 namespace py = pybind11;
@@ -63,7 +64,7 @@ void bind_walker_gait(py::module_& m) {
   m.def("reverse_wave_sequence", &reverse_wave_sequence, "model"_a, "heading"_a,
         "Legs front to rear along `heading`, left first at equal depth (§5.3.1).");
   m.def("plan_gait", &plan_gait, "model"_a, "body_position"_a, "q"_a, "options"_a = GaitPlannerOptions{},
-        py::call_guard<py::gil_scoped_release>(),
+        py::call_guard<py::gil_scoped_release, interruptible>(),
         "Plan options.cycles gait cycles on flat ground from a level body at `body_position` and "
         "configuration q (joints × legs, wheels on z = 0).");
 }

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "bindings.hpp"
+#include "interrupt.hpp"
 #include "exclusive.hpp"
 #include "ernest/walker_sim/footfall_cycle.hpp"
 #include "ernest/walker_sim/gait_execution.hpp"
@@ -68,9 +69,9 @@ void bind_walker_sim(py::module_& m) {
       .def_property_readonly("rocks", &WalkerSim::rocks)
       .def_property_readonly("time", guarded("WalkerSim.time", &WalkerSim::time), "[s]")
       .def("step", guarded("WalkerSim.step", &WalkerSim::step), "q_target"_a, "rate"_a = Eigen::MatrixXd(),
-           py::call_guard<py::gil_scoped_release>(),
+           py::call_guard<py::gil_scoped_release, interruptible>(),
            "One physics step towards q_target with feed-forward joint rates; raises WalkerSimDiverged.")
-      .def("hold", guarded("WalkerSim.hold", &WalkerSim::hold), "q_target"_a, "seconds"_a, py::call_guard<py::gil_scoped_release>(),
+      .def("hold", guarded("WalkerSim.hold", &WalkerSim::hold), "q_target"_a, "seconds"_a, py::call_guard<py::gil_scoped_release, interruptible>(),
            "Hold the targets for `seconds`.")
       .def("body_pose",
            [](const WalkerSim& s) {
@@ -129,11 +130,11 @@ void bind_walker_sim(py::module_& m) {
       .def_readonly("simulated_seconds", &ExecutionTrace::simulated_seconds)
       .def_readonly("wall_seconds", &ExecutionTrace::wall_seconds);
   m.def("execute_joint_path", guarded("execute_joint_path", &execute_joint_path), "sim"_a, "leg"_a, "stance"_a, "path"_a,
-        "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release, interruptible>(),
         "Execute a joint path of `leg` (other legs held at `stance`) and trace its clearances.");
 
   m.def("execute_configuration_path", guarded("execute_configuration_path", &execute_configuration_path), "sim"_a, "leg"_a, "path"_a,
-        "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release, interruptible>(),
         "Execute whole-robot configurations (every leg at once); trace wheel `leg` (-1: none).");
 
   py::class_<GaitExecution>(m, "GaitExecution", "One executed gait cycle.")
@@ -146,7 +147,7 @@ void bind_walker_sim(py::module_& m) {
       .def_readonly("simulated_seconds", &GaitExecution::simulated_seconds)
       .def_readonly("wall_seconds", &GaitExecution::wall_seconds);
   m.def("execute_gait_cycle", guarded("execute_gait_cycle", &execute_gait_cycle), "sim"_a, "plan"_a, "cycle"_a, "options"_a = ExecutionOptions{},
-        py::call_guard<py::gil_scoped_release>(),
+        py::call_guard<py::gil_scoped_release, interruptible>(),
         "Execute cycle `cycle` of a walker.GaitPlan (steps through the compliance waypoints, shifts).");
 
   py::class_<SagScenarioOptions>(m, "SagScenarioOptions", "Seed 003 §4.1 rigid vs sag-compensated swing.")
@@ -185,7 +186,7 @@ void bind_walker_sim(py::module_& m) {
       .def_readonly("six_error", &SagScenarioResult::six_error, "[m]")
       .def_readonly("lifted_error", &SagScenarioResult::lifted_error, "[m]");
   m.def("run_sag_scenario", &run_sag_scenario, "model"_a, "options"_a = SagScenarioOptions{},
-        py::call_guard<py::gil_scoped_release>(),
+        py::call_guard<py::gil_scoped_release, interruptible>(),
         "Plan a swing over a rock against the rigid and the sagged pose, execute both in ODE.");
 
   py::class_<RockMapOptions>(m, "RockMapOptions", "Grid of rock_height_map: square, spacing, dilation.")
@@ -245,7 +246,7 @@ void bind_walker_sim(py::module_& m) {
       .def_readonly("simulated_seconds", &FootfallCycleResult::simulated_seconds)
       .def_readonly("simulation_wall_seconds", &FootfallCycleResult::simulation_wall_seconds);
   m.def("run_footfall_cycle", &run_footfall_cycle, "model"_a, "terrain"_a, "rocks"_a,
-        "options"_a = FootfallCycleOptions{}, py::call_guard<py::gil_scoped_release>(),
+        "options"_a = FootfallCycleOptions{}, py::call_guard<py::gil_scoped_release, interruptible>(),
         "Plan (on `terrain`) and execute (among `rocks`) one reverse-wave gait cycle from the standard stance.");
 }
 

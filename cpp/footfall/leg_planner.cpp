@@ -1,4 +1,5 @@
 #include "ernest/footfall/leg_planner.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <ompl/base/MotionValidator.h>
 #include <ompl/base/PlannerTerminationCondition.h>
@@ -176,7 +177,20 @@ PlanResult LegPlanner::plan(const Eigen::Ref<const Eigen::VectorXd>& start, cons
   }
   planner->setProblemDefinition(pdef);
   planner->setup();
-  const ob::PlannerStatus status = planner->solve(ob::timedPlannerTerminationCondition(options_.time_limit));
+  // Ctrl-C (common/interrupt.hpp) ends the query like the time limit; the exception is raised
+  // after OMPL returns (throwing through OMPL's solve loop is not safe).
+  bool interrupted = false;
+  const ob::PlannerTerminationCondition on_interrupt([&interrupted] {
+    try {
+      poll_interrupt();
+    } catch (const Interrupted&) {
+      interrupted = true;
+    }
+    return interrupted;
+  });
+  const ob::PlannerStatus status = planner->solve(
+      ob::plannerOrTerminationCondition(ob::timedPlannerTerminationCondition(options_.time_limit), on_interrupt));
+  if (interrupted) throw Interrupted("interrupted");
   if (status != ob::PlannerStatus::EXACT_SOLUTION) {
     return finish(PlanStatus::kNoPlan, status == ob::PlannerStatus::TIMEOUT || status == ob::PlannerStatus::APPROXIMATE_SOLUTION
                                            ? "no path found within the time limit"

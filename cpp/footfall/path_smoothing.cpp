@@ -1,4 +1,5 @@
 #include "ernest/footfall/path_smoothing.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <boost/graph/adjacency_list.hpp>
 #include <boost/graph/dijkstra_shortest_paths.hpp>
@@ -82,6 +83,7 @@ SmoothingResult smooth_path(LegCollisionChecker& checker, const Eigen::Ref<const
   std::vector<char> known(std::size_t(nodes.cols()) * nodes.cols(), kUnchecked);
   for (Eigen::Index i = 0; i + 1 < nodes.cols(); ++i) known[std::size_t(i) * nodes.cols() + i + 1] = kFree;  // the plan's edges
   for (r.iterations = 1; r.iterations <= options.max_iterations; ++r.iterations) {
+    poll_interrupt();  // Ctrl-C between iterations (common/interrupt.hpp)
     const std::vector<int> route = shortest(checker, nodes, options.epsilon, known, r.edge_checks);
     const Eigen::Index n = nodes.cols(), m = static_cast<Eigen::Index>(route.size());
     Eigen::MatrixXd simplified(nodes.rows(), m);

@@ -1,4 +1,5 @@
 #include "ernest/footfall/stability_map.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -157,6 +158,7 @@ StabilityMap StabilityMapper::map() {
   Eigen::VectorXd seed = q_.col(leg_);
   const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
   while (!queue.empty()) {
+    poll_interrupt();  // Ctrl-C between cells (common/interrupt.hpp): the mapper is unchanged
     const auto [i, j] = queue.front();
     queue.pop_front();
     seed = q_.col(leg_);

@@ -5,6 +5,7 @@
 #include <limits>
 #include <random>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::perception {
@@ -147,6 +148,7 @@ void render_with_robot(const Raycaster& scene, const std::vector<RobotSolid>& so
   std::normal_distribution<double> noise(0.0, 1.0);
   const float inf = std::numeric_limits<float>::infinity();
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();  // Ctrl-C between rows (common/interrupt.hpp); the frame is discarded
     for (int u = 0; u < w; ++u) {
       const Eigen::Vector3d ray_cam((u - cx) / f, (v - cy) / f, 1.0);
       const double len = ray_cam.norm();

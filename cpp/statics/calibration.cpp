@@ -1,5 +1,6 @@
 // Spring-constant calibration (seed 003 §5.1.3–5.1.4); see the header.
 #include "ernest/statics/calibration.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <algorithm>
 #include <boost/math/tools/minima.hpp>
@@ -76,6 +77,7 @@ struct PerFootFunctor {
   int inputs() const { return feet; }
   int values() const { return measurements; }
   int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
+    poll_interrupt();  // Ctrl-C in a long fit (common/interrupt.hpp): the exception ends the solve
     int row = 0;
     for (const CalibrationStance& st : *stances) {
       SagProblem p = st.problem;

@@ -1,5 +1,6 @@
 // Simulated load survey for eq 11 (seed 004 §3.2): static poses, settled, FTS read.
 #include "ernest/statics/load_survey.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -57,6 +58,7 @@ LoadPose settle_and_measure(const RoverParameters& p, const HeightMap& terrain, 
   mean.loads.setZero();
   mean.roll_torque = 0.0;
   for (int k = 0; k < avg; ++k) {  // forces averaged, attitude and joints of the last step
+    poll_interrupt();  // Ctrl-C between steps (common/interrupt.hpp); step_n above polls too
     sim.step();
     const LoadPose q = pose_from_state(p, sim.state(), so.soil.gravity);
     mean.loads += q.loads / avg;

@@ -1,5 +1,6 @@
 // Seed 004 §3.2, eq 11: the two-body mass model, its statics and its Levenberg–Marquardt fit.
 #include "ernest/statics/mass_model.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -248,6 +249,7 @@ struct Eq11Functor {
   }
 
   int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& fvec) const {
+    poll_interrupt();  // Ctrl-C in a long fit (common/interrupt.hpp): the exception ends the solve
     const Vec6 th = full(x);
     Eigen::Vector4d b;
     for (size_t k = 0; k < geo.size(); ++k) {

@@ -1,6 +1,7 @@
 // Compliance (sag) model, seed 003 §5.1.1 eqs 1–12, solved with Eigen's (unsupported)
 // Levenberg–Marquardt. See sag.hpp for the formulation.
 #include "ernest/statics/sag.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -124,6 +125,7 @@ struct SagFunctor {
   Eigen::Vector3d cg(const Eigen::VectorXd& x) const { return p.cg + x.segment<3>(3 * n); }
 
   int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
+    poll_interrupt();  // Ctrl-C in a long fit (common/interrupt.hpp): the exception ends the solve
     Eigen::Vector3d sum_f = weight, sum_m = (cg(x) - o).cross(weight), f;
     for (int i = 0; i < n; ++i) {
       spring(i, x.segment<3>(3 * i), f);

@@ -1,4 +1,5 @@
 #include "ernest/walker/gait_planner.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -225,6 +226,7 @@ GaitPlan plan_gait(const WalkerModel& model, const Eigen::Vector3d& body_positio
   Planner p(model, options);
   for (int c = 0; c < options.cycles; ++c)
     for (int i = 0; i < legs; ++i) {
+      poll_interrupt();  // Ctrl-C between steps of the plan (common/interrupt.hpp)
       plan.events.push_back(p.step(c, plan.sequence[i], body, q, feet));
       plan.step_lengths(c, i) = plan.events.back().length;
       plan.events.push_back(p.shift(c, body, q, feet));

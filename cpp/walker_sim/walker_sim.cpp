@@ -1,4 +1,5 @@
 #include "ernest/walker_sim/walker_sim.hpp"
+#include "ernest/common/interrupt.hpp"
 
 #include <ode/ode.h>
 
@@ -312,6 +313,7 @@ void WalkerSim::step(const Eigen::Ref<const Eigen::MatrixXd>& q_target,
   require(rate.size() == 0 || (rate.rows() == q_target.rows() && rate.cols() == q_target.cols() &&
                                rate.allFinite()),
           "WalkerSim.step: rate must be empty or finite with the shape of q_target");
+  poll_interrupt();  // Ctrl-C (common/interrupt.hpp) before the step: the walk drivers loop on it
   impl_->step(q_target, rate);
 }
 
@@ -319,8 +321,10 @@ void WalkerSim::hold(const Eigen::Ref<const Eigen::MatrixXd>& q_target, double s
   require_in_range("WalkerSim.hold", "seconds", seconds, 0.0, 1e4);
   impl_->model.check_configuration(q_target);
   const Eigen::MatrixXd none;
-  for (int s = 0, steps = static_cast<int>(std::ceil(seconds / impl_->o.dt - 1e-9)); s < steps; ++s)
+  for (int s = 0, steps = static_cast<int>(std::ceil(seconds / impl_->o.dt - 1e-9)); s < steps; ++s) {
+    poll_interrupt();  // Ctrl-C between whole physics steps (common/interrupt.hpp)
     impl_->step(q_target, none);
+  }
 }
 
 Eigen::Isometry3d WalkerSim::body_pose() const {

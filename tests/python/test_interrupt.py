@@ -9,9 +9,12 @@ per case, the delay from the signal to the KeyboardInterrupt and the result of a
 from __future__ import annotations
 
 import json
+import os
+import signal
 import subprocess
 import sys
 import textwrap
+import time
 
 import pytest
 
@@ -91,6 +94,36 @@ CHILD = textwrap.dedent(r"""
         out["delay"] = interrupt_after(0.5, lambda: r.render(pose, cam))
         cam.width, cam.height = 64, 48
         out["after"] = r.render(pose, cam)[0].shape == (48, 64)
+    elif case == "walker_hold":
+        from ernest_cpp import walker as W, walker_sim as WS
+        m = W.WalkerModel(W.sdm_b_parameters())
+        q = m.standard_configuration
+        sim = WS.WalkerSim(m, m.standard_body_pose(), q)
+        out["delay"] = interrupt_after(0.5, lambda: sim.hold(q, 5000.0))  # about an hour
+        t = sim.time
+        sim.hold(q, 10 * sim.options.dt)
+        out["after"] = (sim.time - t) / sim.options.dt
+    elif case == "execute_path":
+        from ernest_cpp import walker as W, walker_sim as WS
+        m = W.WalkerModel(W.sdm_b_parameters())
+        q = m.standard_configuration
+        sim = WS.WalkerSim(m, m.standard_body_pose(), q)
+        o = WS.ExecutionOptions()
+        o.pause = 60.0  # a minute of simulated holding at each of the two waypoints
+        path = [q[:, 0], q[:, 0]]
+        out["delay"] = interrupt_after(0.5, lambda: WS.execute_joint_path(sim, 0, q, path, o))
+        out["after"] = bool(np.all(np.isfinite(sim.joint_angles())))
+    elif case == "stability_map":
+        from ernest_cpp import footfall as F, walker as W
+        m = W.WalkerModel(W.sdm_b_parameters())
+        body, q = m.standard_body_pose(), m.standard_configuration
+        terrain = F.rock_field(F.RockFieldOptions(), m.contact_points(body, q)[:2])
+        o = F.StabilityMapOptions()
+        o.cell = 0.004  # 1.5 million cells: seconds
+        mapper = F.StabilityMapper(m, terrain, body, q, 0, o)
+        out["delay"] = interrupt_after(0.5, mapper.map)
+        o.cell = 0.1
+        out["after"] = F.StabilityMapper(m, terrain, body, q, 0, o).map() is not None
     print(json.dumps(out))
 """)
 
@@ -136,3 +169,48 @@ def test_ctrl_c_stops_a_stereo_render():
     res = run_case("render")
     check_prompt(res)
     assert res["after"] is True
+
+
+def test_ctrl_c_stops_a_walker_hold_between_physics_steps():
+    res = run_case("walker_hold")
+    check_prompt(res)
+    assert res["after"] == pytest.approx(10.0)
+
+
+def test_ctrl_c_stops_a_walker_joint_path():
+    res = run_case("execute_path")
+    check_prompt(res)
+    assert res["after"] is True
+
+
+def test_ctrl_c_stops_a_stability_map():
+    res = run_case("stability_map")
+    check_prompt(res)
+    assert res["after"] is True
+
+
+def test_sigint_from_another_process_stops_an_hour_long_hold():
+    child = textwrap.dedent("""
+        import sys, time
+        from ernest_cpp import walker as W, walker_sim as WS
+        m = W.WalkerModel(W.sdm_b_parameters())
+        q = m.standard_configuration
+        sim = WS.WalkerSim(m, m.standard_body_pose(), q)
+        print("ready", flush=True)
+        try:
+            sim.hold(q, 5000.0)
+        except KeyboardInterrupt:
+            print("KeyboardInterrupt", flush=True)
+    """)
+    p = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().strip() == "ready"
+        time.sleep(1.0)
+        sent = time.monotonic()
+        os.kill(p.pid, signal.SIGINT)
+        out, _ = p.communicate(timeout=30)
+        assert time.monotonic() - sent < 5.0
+    finally:
+        p.kill()
+        p.wait()
+    assert out.strip() == "KeyboardInterrupt" and p.returncode == 0
