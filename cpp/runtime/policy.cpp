@@ -183,6 +183,21 @@ PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations&
     if (v == root.end() || !v->is_number()) mismatch(path, std::string("field '") + key + "' is missing or not a number");
     return v->get<double>();
   };
+  // sizes are whole numbers: 45.5 must not read as 45
+  auto integer = [&](const char* key) {
+    const auto v = root.find(key);
+    if (v == root.end() || !v->is_number_integer())
+      mismatch(path, std::string("field '") + key + "' is missing or not an integer");
+    return v->get<std::int64_t>();
+  };
+  auto hex64 = [&](const char* key) {
+    const auto h = root.find(key);
+    if (h == root.end()) return std::string();
+    if (!h->is_string() || h->get_ref<const std::string&>().size() != 64 ||
+        h->get_ref<const std::string&>().find_first_not_of("0123456789abcdef") != std::string::npos)
+      mismatch(path, std::string("field '") + key + "' is not a 64-digit lower-case hex string");
+    return h->get<std::string>();
+  };
   m.format = str("format");
   if (m.format != "ernest-policy-v1") mismatch(path, "format '" + m.format + "', expected 'ernest-policy-v1'");
   m.layout_version = str("layout_version");
@@ -191,14 +206,15 @@ PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations&
       std::find(legacy.begin(), legacy.end(), m.layout_version) == legacy.end())
     mismatch(path, "layout_version '" + m.layout_version + "', the runtime builds '" +
                        expect.layout_version + "'");
-  m.obs_dim = static_cast<int>(num("obs_dim"));
-  m.act_dim = static_cast<int>(num("act_dim"));
-  if (m.obs_dim != sensing::kObservationSize)
-    mismatch(path, "obs_dim " + std::to_string(m.obs_dim) + ", the runtime builds " +
+  const std::int64_t obs_dim = integer("obs_dim"), act_dim = integer("act_dim");
+  if (obs_dim != sensing::kObservationSize)
+    mismatch(path, "obs_dim " + std::to_string(obs_dim) + ", the runtime builds " +
                        std::to_string(sensing::kObservationSize) + " values");
-  if (m.act_dim != sensing::kActionSize)
-    mismatch(path, "act_dim " + std::to_string(m.act_dim) + ", the runtime expects " +
+  if (act_dim != sensing::kActionSize)
+    mismatch(path, "act_dim " + std::to_string(act_dim) + ", the runtime expects " +
                        std::to_string(sensing::kActionSize) + " commands");
+  m.obs_dim = static_cast<int>(obs_dim);
+  m.act_dim = static_cast<int>(act_dim);
   m.policy_rate_hz = num("policy_rate_hz");
   if (!close(m.policy_rate_hz, expect.policy_rate_hz, expect.rel_tol)) {
     std::ostringstream os;
@@ -218,11 +234,8 @@ PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations&
                  expect.rel_tol);
   compare_vector(path, "action_high", m.action_high,
                  Eigen::Vector3d(l.vx_max, l.yaw_rate_max, l.roll_rate_max), expect.rel_tol);
-  if (const auto h = root.find("weights_sha256"); h != root.end()) {
-    if (!h->is_string() || h->get_ref<const std::string&>().size() != 64)
-      mismatch(path, "field 'weights_sha256' is not a 64-digit hex string");
-    m.weights_sha256 = h->get<std::string>();
-  }
+  m.weights_sha256 = hex64("weights_sha256");
+  m.policy_sha256 = hex64("policy_sha256");
   if (const auto names = root.find("observation_names"); names != root.end() && names->is_array())
     for (const auto& n : *names)
       if (n.is_string()) m.observation_names.push_back(n.get<std::string>());
@@ -311,6 +324,16 @@ Policy::Policy(const std::string& path, const PolicyExpectations& expect, const 
                                "altered or corrupt; got " + got.substr(0, 16) + "..., expected " +
                                p.meta.weights_sha256.substr(0, 16) + "...)");
     p.meta.weights_verified = true;
+  }
+  if (p.meta.policy_sha256.empty()) {
+    std::cerr << "warning: " << path << ": no policy_sha256 in its metadata, its code and metadata "
+              << "cannot be checked; add it with `ernest stamp-policy " << path << "`\n";
+  } else {
+    if (policy_sha256(path, p.meta.policy_sha256) != p.meta.policy_sha256)
+      throw PolicyError(PolicyError::Kind::ChecksumMismatch,
+                        path + ": its archive (code, constants, weights or metadata) does not match "
+                               "the policy_sha256 in its metadata (file altered or corrupt)");
+    p.meta.policy_verified = true;
   }
   p.module.eval();
   p.divisors = expect.scales.divisors();

@@ -5,8 +5,10 @@
 // roll rate [rad/s]), plus the metadata file `ernest_metadata.json`. Every way of being the wrong
 // file is reported by a PolicyError naming what is wrong; inference never allocates Eigen memory
 // and runs on one intra-op thread in inference mode. Integrity: the metadata's `weights_sha256`
-// (SHA-256 of every parameter and buffer, the digest of export.py's weights_sha256) is recomputed
-// on load; a file without it (exported before it existed) loads with a warning on stderr.
+// (SHA-256 of every parameter and buffer, the digest of export.py's weights_sha256) and
+// `policy_sha256` (SHA-256 of the whole archive: code, constants, weights and metadata;
+// policy_digest.cpp) are recomputed on load; a file without one (written before it existed)
+// loads with a warning on stderr. python/ernest_cpp/rl/policy_file.py makes the same checks.
 #pragma once
 
 #include <Eigen/Core>
@@ -34,7 +36,7 @@ class PolicyError : public std::runtime_error {
     InputSize,        ///< the module does not accept the observation vector
     OutputSize,       ///< the module does not return one command of the expected size
     Inference,        ///< a forward pass failed or returned non-finite values
-    ChecksumMismatch, ///< the weights differ from the metadata's weights_sha256 (altered file)
+    ChecksumMismatch, ///< the weights or the archive differ from the metadata's digests (altered file)
   };
   PolicyError(Kind kind, const std::string& what) : std::runtime_error(what), kind_(kind) {}
   Kind kind() const { return kind_; }
@@ -77,6 +79,8 @@ struct PolicyMetadata {
   std::vector<std::string> observation_names;
   std::string weights_sha256;      ///< hex digest from the metadata; empty if the file has none
   bool weights_verified = false;   ///< the digest was present and matched the loaded weights
+  std::string policy_sha256;       ///< digest of the whole archive; empty if the file has none
+  bool policy_verified = false;    ///< that digest was present and matched the archive
   std::string json;  ///< the raw file
 };
 
@@ -94,6 +98,13 @@ PolicyMetadata check_metadata(const std::string& json_text, const PolicyExpectat
 /// dotted name, '\n', the shape as comma-separated integers, '\n', the values as little-endian
 /// float32. The same bytes as python/ernest_cpp/rl/export.py weights_sha256.
 std::string weights_sha256(const torch::jit::Module& module);
+
+/// SHA-256 (lower-case hex) of the policy archive at `path`: every record but
+/// .data/serialization_id (torch derives it at each save), uncompressed, in byte-wise name
+/// order, each as its name, '\n', its size in decimal, '\n', its bytes; the metadata record
+/// with `digest_in_metadata` (which must occur there exactly once) replaced by as many '0'. The
+/// same bytes as python/ernest_cpp/rl/policy_file.py policy_sha256. Throws PolicyError.
+std::string policy_sha256(const std::string& path, const std::string& digest_in_metadata);
 
 class Policy {
  public:

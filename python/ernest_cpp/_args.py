@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 
 def seed(text: str) -> int:
@@ -13,4 +14,15 @@ def seed(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
     if not 0 <= value < 2 ** 64:
         raise argparse.ArgumentTypeError(f"{value} is outside [0, 2**64)")
+    return value
+
+
+def positive_finite(text: str) -> float:
+    """A finite number > 0 (a rate in Hz): refuses 0, negatives, nan and inf."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text} must be a finite number > 0")
     return value

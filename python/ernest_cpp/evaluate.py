@@ -46,7 +46,10 @@ def controllers(policy_file: str | None):
 
         from .rl.layout import check_policy_layout
 
-        module, meta = load_policy(policy_file)
+        from .rl.policy_file import check_runtime
+
+        # the metadata checks of ernest_runtime: both refuse the same files
+        module, meta = load_policy(policy_file, check=check_runtime)
         scale = np.asarray(sensing.ObservationScales().divisors())
         check_policy_sizes(module, meta, policy_file)
         check_policy_layout(meta, policy_file)  # the module divides by its own table: same one
@@ -84,6 +87,9 @@ def check_policy_sizes(module, meta: dict, path: str) -> None:
         got = out.numel() if isinstance(out, torch.Tensor) else type(out).__name__
         raise ValueError(f"{path}: the module returns {got} values for one observation, "
                          f"expected {n_act} (Vx, yaw rate, roll rate)")
+    if not bool(torch.isfinite(out).all()):
+        raise ValueError(f"{path}: the policy returned a non-finite command for the zero "
+                         "observation")
 
 
 def run_episode(env_id: str, kwargs: dict, policy, passive: bool, seed: int):

@@ -126,6 +126,40 @@ TEST(PolicyLoad, WeightsChecksum) {
   EXPECT_TRUE(legacy.metadata().weights_sha256.empty());
 }
 
+// The archive digest (policy_sha256: code, constants, weights, metadata): a file stamped with it
+// loads verified; the same weights under an edited forward(), or an edited metadata member that
+// every other check accepts, are refused.
+TEST(PolicyLoad, ArchiveChecksum) {
+  const std::string zeros(64, '0');
+  auto module = [](const std::string& name, const std::string& src) {
+    torch::jit::Module m("__torch__.TestPolicy_" + name);
+    m.register_buffer("c", torch::tensor({0.01f, 0.02f, 0.03f}));
+    m.define(src);
+    return m;
+  };
+  auto save = [](torch::jit::Module& m, const std::string& name, const std::string& meta) {
+    const std::string path = (tmpdir() / (name + ".pt")).string();
+    m.save(path, {{runtime::Policy::kMetadataFile, meta}});
+    return path;
+  };
+  torch::jit::Module good = module("archive_good", "def forward(self, x):\n  return self.c + 0.0 * x[0:3]\n");
+  // Written with the placeholder, digested, written again (one module saves the same records).
+  const std::string path = save(good, "archive_good", metadata_json("policy_sha256", "\"" + zeros + "\""));
+  const std::string digest = runtime::policy_sha256(path, zeros);
+  const std::string meta = metadata_json("policy_sha256", "\"" + digest + "\"");
+  save(good, "archive_good", meta);
+  runtime::Policy p(path);
+  EXPECT_TRUE(p.metadata().policy_verified);
+  EXPECT_EQ(p.metadata().policy_sha256, digest);
+  std::string msg;
+  torch::jit::Module times10 = module("archive_x10", "def forward(self, x):\n  return 10.0 * self.c + 0.0 * x[0:3]\n");
+  EXPECT_EQ(load_error(save(times10, "archive_x10", meta), &msg), PolicyError::Kind::ChecksumMismatch);
+  EXPECT_TRUE(contains(msg, "archive_x10.pt") && contains(msg, "policy_sha256")) << msg;
+  std::string renamed = meta;
+  renamed.replace(renamed.find("heading_deviation"), 17, "heading_deviatio2");
+  EXPECT_EQ(load_error(save(good, "archive_meta", renamed), &msg), PolicyError::Kind::ChecksumMismatch);
+}
+
 TEST(PolicyLoad, MetadataLayoutMismatch) {
   struct Case {
     std::string field, value, expect_in_message;

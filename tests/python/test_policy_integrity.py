@@ -1,5 +1,6 @@
-"""Integrity of exported policies and training checkpoints: altered weights
-are refused in Python and in the C++ runtime, a policy is checked before ``ernest evaluate`` runs
+"""Integrity of exported policies and training checkpoints: altered weights, an edited
+``forward()`` and damaged metadata are refused alike in Python and in the C++ runtime (one corpus
+of damaged files goes through both), a policy is checked before ``ernest evaluate`` runs
 anything, a writer killed mid-checkpoint leaves nothing behind for good, a corrupt latest
 checkpoint points at the newest intact one, and pruning never deletes the checkpoint just saved.
 """
@@ -20,9 +21,10 @@ import torch
 from ernest_cpp import cli, sensing
 from ernest_cpp.envs import ErnestEnv
 from ernest_cpp.rl import config as C
-from ernest_cpp.rl.export import (HASH_KEY, METADATA_FILE, ExportError, _quiet_jit, export_actor,
-                                  load_policy, metadata, weights_sha256)
+from ernest_cpp.rl.export import (HASH_KEY, METADATA_FILE, ExportedPolicy, ExportError, _quiet_jit,
+                                  export_actor, load_policy, metadata, weights_sha256)
 from ernest_cpp.rl.networks import Actor
+from ernest_cpp.rl.policy_file import POLICY_KEY
 from ernest_cpp.rl.storage import CorruptFileError, clean_stale
 from ernest_cpp.rl.checkpoints import load_checkpoint
 from ernest_cpp.rl.trainer import Trainer
@@ -88,7 +90,8 @@ def test_flipped_weight_bytes_are_refused_in_python_and_cpp(tmp_path):
 def test_policy_without_digest_loads_with_a_warning_and_stamp_adds_it(tmp_path, capsys):
     good = _export(tmp_path / "good.pt")
     _, meta = load_policy(good)
-    legacy_meta = {k: v for k, v in meta.items() if k != HASH_KEY}
+    # as written before any digest existed (dropping one digest alone is an altered file)
+    legacy_meta = {k: v for k, v in meta.items() if k not in (HASH_KEY, POLICY_KEY)}
     legacy = _resave(good, str(tmp_path / "legacy.pt"), legacy_meta)
     with pytest.warns(UserWarning, match="stamp-policy"):
         mod, _ = load_policy(legacy)
@@ -237,3 +240,152 @@ def test_export_never_replaces_a_device_pipe_or_folder_and_reports_unwritable_pa
     if os.path.isdir("/proc"):  # a folder that takes no new files
         assert cli.main(["export", str(run), "--out", "/proc/ernest-policy.pt"]) == 2
         assert "cannot write /proc/ernest-policy.pt" in capsys.readouterr().err
+
+
+# ---- the digest of the whole archive, and one corpus of damaged files for both loaders --------
+class _Times10(ExportedPolicy):
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        x = (obs - self.obs_offset) / self.obs_scale
+        return 10.0 * (self.act_low + (self.actor(x) + 1.0) * 0.5 * (self.act_high - self.act_low))
+
+
+class _Constant(ExportedPolicy):
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.act_high + 0.0 * obs[..., :3]
+
+
+# Metadata damage: (name, edit of the metadata dict or of its JSON text). Each is also written
+# with its digest recomputed and with no digest: the metadata checks must refuse it by themselves.
+META_DAMAGE = [
+    ("policy_rate_hz 0", lambda m: m.update(policy_rate_hz=0.0)),
+    ("policy_rate_hz -2", lambda m: m.update(policy_rate_hz=-2.0)),
+    ("policy_rate_hz 1e308", lambda m: m.update(policy_rate_hz=1e308)),
+    ("policy_rate_hz '2'", lambda m: m.update(policy_rate_hz="2")),
+    ("policy_rate_hz NaN literal", '"policy_rate_hz": NaN'),
+    ("policy_rate_hz 1e999", '"policy_rate_hz": 1e999'),
+    ("no format", lambda m: m.pop("format")),
+    ("format v9", lambda m: m.update(format="ernest-policy-v9")),
+    ("action_high 100", lambda m: m["action_high"].__setitem__(0, 100.0)),
+    ("obs_dim 45.0", lambda m: m.update(obs_dim=45.0)),
+    ("obs_dim 44", lambda m: m.update(obs_dim=44)),
+    ("act_dim true", lambda m: m.update(act_dim=True)),
+    ("obs_scale other table", lambda m: m["obs_scale"].__setitem__(6, 100.0)),
+    ("layout v99", lambda m: m.update(layout_version="ernest-obs-v99")),
+    ("duplicate member", '"policy_rate_hz": 2.0, "policy_rate_hz": 2.0'),
+    ("weights digest not hex", lambda m: m.update(weights_sha256="z" * 64)),
+]
+
+
+def _damaged_text(good_text: str, edit) -> str:
+    if isinstance(edit, str):  # replaces the rate member in the text
+        assert '"policy_rate_hz": 2.0' in good_text
+        return good_text.replace('"policy_rate_hz": 2.0', edit)
+    meta = json.loads(good_text)
+    edit(meta)
+    return json.dumps(meta)
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory):
+    """(good file, {case: damaged file})."""
+    from ernest_cpp.rl.export import save_stamped
+    from ernest_cpp.rl.policy_file import PLACEHOLDER
+
+    d = tmp_path_factory.mktemp("corpus")
+    torch.manual_seed(3)
+    actor = Actor(sensing.OBSERVATION_SIZE, sensing.ACTION_SIZE, 64)
+    good = str(d / "good.pt")
+    export_actor(actor, LAYOUT, good)
+    extra = {METADATA_FILE: ""}
+    with _quiet_jit():
+        module = torch.jit.load(good, _extra_files=extra)
+    text = extra[METADATA_FILE].decode()
+    digest = json.loads(text)[POLICY_KEY]
+    files = {}
+    for name, cls in (("forward x10", _Times10), ("forward constant", _Constant)):
+        with _quiet_jit():
+            edited = torch.jit.script(cls(actor, LAYOUT, 2.0))
+        files[name] = _resave("", str(d / f"{name}.pt"), json.loads(text), edited)
+    # a metadata edit every check accepts: only the digest sees it
+    files["observation name edited"] = _write(
+        module, text.replace('"lateral_deviation"', '"lateral_deviation_edited"'),
+        str(d / "names.pt"))
+    for i, (name, edit) in enumerate(META_DAMAGE):
+        bad = _damaged_text(text, edit)
+        files[f"{name} (stale digest)"] = _write(module, bad, str(d / f"m{i}s.pt"))
+        save_stamped(module, bad.replace(digest, PLACEHOLDER), str(d / f"m{i}r.pt"))
+        files[f"{name} (re-stamped)"] = str(d / f"m{i}r.pt")
+        files[f"{name} (no digest)"] = _write(
+            module, bad.replace(f', "{POLICY_KEY}": "{digest}"', ""), str(d / f"m{i}n.pt"))
+    return good, files
+
+
+def _write(module, text: str, path: str) -> str:
+    with _quiet_jit():
+        torch.jit.save(module, path, _extra_files={METADATA_FILE: text})
+    return path
+
+
+def test_the_archive_digest_is_the_documented_bytes(tmp_path):
+    # Independent of the implementation: the records, uncompressed, by name, the id excluded.
+    import hashlib
+    import zipfile
+
+    path = _export(tmp_path / "p.pt")
+    digest = load_policy(path)[1][POLICY_KEY]
+    h = hashlib.sha256()
+    with zipfile.ZipFile(path) as z:
+        records = {i.filename.split("/", 1)[1]: z.read(i) for i in z.infolist()}
+    records.pop(".data/serialization_id")
+    records["extra/" + METADATA_FILE] = records["extra/" + METADATA_FILE].replace(
+        digest.encode(), b"0" * 64)
+    for name in sorted(records):
+        h.update(f"{name}\n{len(records[name])}\n".encode() + records[name])
+    assert h.hexdigest() == digest
+
+
+def test_python_and_the_runtime_refuse_the_same_damaged_files(corpus):
+    from ernest_cpp import evaluate
+
+    good, files = corpus
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        evaluate.controllers(good)
+    r = run_runtime("--policy", good, "--scenario", "flat", "--seed", "1", "--duration", "0.5")
+    assert r.returncode == 0 and "warning" not in r.stderr, r.stderr
+    python_accepts, runtime_accepts = [], []
+    for case, path in files.items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # "no policy_sha256": the no-digest variants
+            try:
+                evaluate.controllers(path)
+                python_accepts.append(case)
+            except ValueError as e:
+                assert path in str(e), (case, str(e))
+        r = run_runtime("--policy", path, "--scenario", "flat", "--seed", "1", "--duration", "0.5")
+        if r.returncode == 0:
+            runtime_accepts.append(case)
+        else:
+            assert path in r.stderr, (case, r.stderr)
+    assert python_accepts == [] and runtime_accepts == []
+
+
+def test_an_edited_forward_is_refused_naming_the_digest(corpus):
+    _, files = corpus
+    for case in ("forward x10", "forward constant"):
+        with pytest.raises(ExportError, match="does not match the policy_sha256"):
+            load_policy(files[case])
+        r = run_runtime("--policy", files[case], "--scenario", "flat", "--seed", "1",
+                        "--duration", "0.5")
+        assert r.returncode == 1 and "checksum mismatch" in r.stderr, r.stderr
+        assert "policy_sha256" in r.stderr
+
+
+@pytest.mark.parametrize("rate", ["nan", "0", "-2", "inf"])
+def test_export_refuses_a_rate_that_is_not_finite_and_positive(rate, tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["export", str(tmp_path), "--out", str(tmp_path / "p.pt"), "--policy-rate", rate])
+    assert e.value.code == 2 and "--policy-rate" in capsys.readouterr().err
+    with pytest.raises(ExportError, match="policy_rate_hz"):
+        export_actor(Actor(45, 3, 8), LAYOUT, str(tmp_path / "p.pt"), float(rate))
+    assert not (tmp_path / "p.pt").exists()

@@ -188,10 +188,10 @@ def _export(args) -> int:
 
 
 def _stamp(args) -> int:
-    from .export import HASH_KEY, stamp_policy
+    from .export import HASH_KEY, POLICY_KEY, stamp_policy
 
     meta = stamp_policy(args.policy)
-    print(f"{args.policy}: {HASH_KEY} {meta[HASH_KEY]}")
+    print(f"{args.policy}: {HASH_KEY} {meta[HASH_KEY]}, {POLICY_KEY} {meta[POLICY_KEY]}")
     return 0
 
 
@@ -245,14 +245,16 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("export", help="export an actor to TorchScript with its scaling")
     p.add_argument("checkpoint", help="run, consolidation or checkpoint folder")
     p.add_argument("--out", required=True, help="output .pt file")
-    p.add_argument("--policy-rate", type=float, default=2.0, help="policy rate in Hz (Table 5: 2)")
+    p.add_argument("--policy-rate", type=_args.positive_finite, default=2.0,
+                   help="policy rate in Hz, finite and > 0 (Table 5: 2)")
     p.set_defaults(func=_export)
 
-    p = subparsers.add_parser("stamp-policy", help="add the weights checksum to a policy exported "
-                              "without one (in place)",
-                              description="Add weights_sha256 to the metadata of a policy file "
-                              "exported before checksums existed; the rewritten file gives "
-                              "bit-identical actions. A file that already has a checksum is "
-                              "left as is, or refused if its weights do not match it.")
+    p = subparsers.add_parser("stamp-policy", help="add the checksums a policy lacks (in place)",
+                              description="Add weights_sha256 (the weights) and policy_sha256 "
+                              "(the whole archive: code, constants, weights, metadata) to the "
+                              "metadata of a policy file written before they existed; the "
+                              "rewritten file gives bit-identical actions. A file with both is "
+                              "left as is; one whose weights or archive do not match a checksum "
+                              "it has is refused.")
     p.add_argument("policy", help="exported .pt file")
     p.set_defaults(func=_stamp)

@@ -11,10 +11,13 @@ is stored in the archive as the extra file ``ernest_metadata.json`` and as modul
 is written to a temporary name, reloaded and compared with the Python actor on a set of inputs,
 and only then renamed into place.
 
-Integrity: the metadata carries ``weights_sha256`` (:func:`weights_sha256`), checked on every load
-here and in the C++ runtime (cpp/runtime/policy.cpp computes the same digest), so a file whose
-weights were altered is refused instead of silently giving other actions. Files exported before
-the digest existed still load, with a warning; ``ernest stamp-policy FILE`` adds it.
+Integrity: the metadata carries ``policy_sha256``, the digest of the whole archive (code,
+constants, weights and metadata; policy_file.py), and ``weights_sha256`` (:func:`weights_sha256`),
+both checked on every load here and in the C++ runtime, so a file whose ``forward()``, weights or
+metadata were altered is refused instead of silently giving other actions. Files written before a
+digest existed still load, with a warning; ``ernest stamp-policy FILE`` adds the missing ones.
+The metadata itself must pass the runtime's checks (policy_file.check_generic on every load,
+check_runtime in ``ernest evaluate``).
 """
 
 import hashlib
@@ -29,13 +32,9 @@ from torch import nn
 
 from . import layout as L
 from .networks import Actor
-
-METADATA_FILE = "ernest_metadata.json"
-HASH_KEY = "weights_sha256"
-
-
-class ExportError(ValueError):
-    pass
+from .policy_file import (METADATA_FILE, PLACEHOLDER, POLICY_KEY, ExportError, check_generic,
+                          parse_metadata, policy_sha256)
+from .policy_file import WEIGHTS_KEY as HASH_KEY
 
 
 class _quiet_jit:
@@ -119,19 +118,19 @@ def _read(path: str) -> tuple[torch.jit.ScriptModule, dict]:
             mod = torch.jit.load(path, _extra_files=extra)
     except Exception as exc:
         raise ExportError(f"{path}: not a loadable TorchScript policy ({exc})") from None
-    try:
-        meta = json.loads(extra[METADATA_FILE])
-    except json.JSONDecodeError:
-        raise ExportError(f"{path}: missing or invalid {METADATA_FILE}") from None
-    if not isinstance(meta, dict):
-        raise ExportError(f"{path}: {METADATA_FILE} is not a JSON object")
-    return mod, meta
+    if not extra[METADATA_FILE]:
+        raise ExportError(f"{path}: the archive has no {METADATA_FILE} (export it with "
+                          "`ernest export`)")
+    return mod, parse_metadata(extra[METADATA_FILE], path)
 
 
-def load_policy(path: str) -> tuple[torch.jit.ScriptModule, dict]:
-    """Load an exported policy and check its weights against the metadata's digest. A file
-    without a digest (exported before it existed) loads with a warning."""
+def load_policy(path: str, check=check_generic) -> tuple[torch.jit.ScriptModule, dict]:
+    """Load an exported policy: its metadata must pass ``check`` (policy_file.check_generic, or
+    check_runtime for the runtime's own expectations), its weights must match ``weights_sha256``
+    and its archive ``policy_sha256``. A digest the file lacks (written before it existed) is a
+    warning."""
     mod, meta = _read(path)
+    check(meta, path)
     want = meta.get(HASH_KEY)
     if want is None:
         warnings.warn(f"{path}: no {HASH_KEY} in its metadata, its weights cannot be checked; "
@@ -140,6 +139,13 @@ def load_policy(path: str) -> tuple[torch.jit.ScriptModule, dict]:
         raise ExportError(f"{path}: its weights do not match the {HASH_KEY} in its metadata "
                           f"(file altered or corrupt; got {weights_sha256(mod)[:16]}..., "
                           f"expected {str(want)[:16]}...)")
+    want = meta.get(POLICY_KEY)
+    if want is None:
+        warnings.warn(f"{path}: no {POLICY_KEY} in its metadata, its code and metadata cannot be "
+                      f"checked; add it with `ernest stamp-policy {path}`", stacklevel=2)
+    elif policy_sha256(path, want) != want:
+        raise ExportError(f"{path}: its archive (code, constants, weights or metadata) does not "
+                          f"match the {POLICY_KEY} in its metadata (file altered or corrupt)")
     return mod, meta
 
 
@@ -152,18 +158,32 @@ def check_replaceable(path: str) -> None:
                           f"it and renamed into its place); give a .pt file path")
 
 
+def save_stamped(module, meta_text: str, path: str) -> None:
+    """torch.jit.save with ``policy_sha256`` filled in: ``meta_text`` holds the placeholder
+    (64 "0") as that field's value; the archive is written with it, digested, and written again
+    with the digest (saving one module twice gives the same records)."""
+    with _quiet_jit():
+        torch.jit.save(module, path, _extra_files={METADATA_FILE: meta_text})
+        digest = policy_sha256(path, PLACEHOLDER)
+        torch.jit.save(module, path,
+                       _extra_files={METADATA_FILE: meta_text.replace(PLACEHOLDER, digest)})
+
+
 def _save_verified(module, meta: dict, path: str, check) -> None:
-    """Save to a temporary sibling, reload it, run ``check(loaded, meta_back)``, rename (``path``:
-    see ``check_replaceable``)."""
+    """Save to a temporary sibling with its digest (``meta[POLICY_KEY]`` is set), reload it, run
+    ``check(loaded)``, rename (``path``: see ``check_replaceable``)."""
     check_replaceable(path)
     tmp = f"{path}.tmp-{uuid.uuid4().hex[:8]}"
     try:
+        meta[POLICY_KEY] = PLACEHOLDER
         try:
-            with _quiet_jit():
-                torch.jit.save(module, tmp, _extra_files={METADATA_FILE: json.dumps(meta)})
+            save_stamped(module, json.dumps(meta), tmp)
+        except ExportError:
+            raise
         except Exception as exc:  # torch raises RuntimeError for a file it cannot write
             raise ExportError(f"cannot write {path}: {exc}") from None
         loaded, meta_back = load_policy(tmp)
+        meta[POLICY_KEY] = meta_back[POLICY_KEY]
         if meta_back != json.loads(json.dumps(meta)):
             raise ExportError("metadata read back differs from the metadata written")
         check(loaded)
@@ -174,15 +194,22 @@ def _save_verified(module, meta: dict, path: str, check) -> None:
 
 
 def stamp_policy(path: str) -> dict:
-    """Add ``weights_sha256`` to a policy exported without it, in place (atomically); the
-    rewritten file must give bit-identical actions. Returns the metadata."""
+    """Add the digests a policy lacks (``weights_sha256``, ``policy_sha256``), in place
+    (atomically); the rewritten file must give bit-identical actions. A digest the file has must
+    match it (else ExportError: an altered file is never blessed). Returns the metadata."""
     mod, meta = _read(path)
+    check_generic(meta, path)
     digest = weights_sha256(mod)
-    if HASH_KEY in meta:
-        if meta[HASH_KEY] != digest:
-            raise ExportError(f"{path}: already has a {HASH_KEY} and its weights do not match it "
-                              f"(file altered or corrupt); not re-stamping")
-        return meta
+    if HASH_KEY in meta and meta[HASH_KEY] != digest:
+        raise ExportError(f"{path}: already has a {HASH_KEY} and its weights do not match it "
+                          f"(file altered or corrupt); not re-stamping")
+    if POLICY_KEY in meta:
+        if policy_sha256(path, meta[POLICY_KEY]) != meta[POLICY_KEY]:
+            raise ExportError(f"{path}: already has a {POLICY_KEY} and its archive does not match "
+                              f"it (file altered or corrupt); not re-stamping")
+        if HASH_KEY in meta:
+            return meta
+        del meta[POLICY_KEY]  # re-stamped below with the weights digest added
     meta[HASH_KEY] = digest
     obs = torch.zeros(1, int(meta.get("obs_dim", 45)))
     obs = torch.cat([obs, torch.from_numpy(np.random.default_rng(0).normal(
@@ -202,7 +229,11 @@ def stamp_policy(path: str) -> dict:
 def export_actor(actor: Actor, lay: L.ObservationLayout, path: str,
                  policy_rate_hz: float = L.POLICY_RATE_HZ, extra_meta: dict | None = None,
                  atol: float = 1e-5) -> dict:
-    """Script, save, reload and verify; returns the metadata. Raises ExportError on mismatch."""
+    """Script, save, reload and verify; returns the metadata. Raises ExportError on mismatch or
+    on a policy rate that is not a finite number > 0."""
+    if not (isinstance(policy_rate_hz, (int, float)) and np.isfinite(policy_rate_hz)
+            and policy_rate_hz > 0):
+        raise ExportError(f"policy_rate_hz = {policy_rate_hz!r} must be a finite number > 0 [Hz]")
     if actor.obs_dim != lay.obs_dim or actor.act_dim != lay.act_dim:
         raise ExportError(f"actor sizes {actor.obs_dim}/{actor.act_dim} do not match the layout "
                           f"{lay.obs_dim}/{lay.act_dim}")
