@@ -607,6 +607,25 @@ def test_consolidation_continues_a_given_agent_on_relabelled_rewards(tmp_path, c
     assert cli.main(["consolidate", run, "--out", str(tmp_path / "bad"), "--set",
                      "consolidate.w_delta=-1"] + small) == 2
     assert "consolidate.w_delta" in capsys.readouterr().err
+    for bad in ("-1", "nan", "true"):
+        assert cli.main(["consolidate", run, "--out", str(tmp_path / "bad3"), "--set",
+                         f"consolidate.init={first['path']}", "--set",
+                         f"consolidate.anchor={bad}"] + small) == 2
+        assert "consolidate.anchor" in capsys.readouterr().err
+    assert cli.main(["consolidate", run, "--out", str(tmp_path / "bad4"), "--set",
+                     "consolidate.anchor=1"] + small) == 2  # an anchor needs an agent to hold
+    assert "give an init" in capsys.readouterr().err
+    # with an anchor the continued actor moves less from the given one than without
+    moved = {}
+    for w in (0, 1000):
+        d = str(tmp_path / f"anchor{w}")
+        assert cli.main(["consolidate", run, "--out", d, "--set", "consolidate.iterations=10",
+                         "--set", f"consolidate.init={first['path']}", "--set",
+                         "consolidate.lr=1e-3", "--set", f"consolidate.anchor={w}"] + small) == 0
+        a = load_checkpoint(d, with_buffer=False)["agent"]["actor"]
+        moved[w] = sum(float((a[k] - v).abs().sum()) for k, v in first["agent"]["actor"].items())
+    assert "held by an anchor of weight 1000" in capsys.readouterr().out
+    assert moved[1000] < moved[0], moved
     assert cli.main(["consolidate", run, "--out", str(tmp_path / "bad2"), "--set",
                      f"consolidate.init={first['path']}", "--set", "consolidate.hidden=32",
                      "--set", "log.progress_bar=false", "--no-eval"]) == 2

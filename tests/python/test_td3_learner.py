@@ -35,6 +35,7 @@ class ReferenceTD3:
         self.actor_opt = torch.optim.Adam(self.actor.parameters(), lr=cfg.actor_lr)
         self.critic_opt = torch.optim.Adam(self.critic.parameters(), lr=cfg.critic_lr)
         self.updates = 0
+        self.anchor = None  # (frozen actor, weight): TD3+BC's term towards a policy
 
     def update(self, b: dict) -> dict:
         c = self.c
@@ -52,7 +53,13 @@ class ReferenceTD3:
         self.updates += 1
         info = {"critic_loss": loss.item(), "q1": q1.mean().item(), "q_target": y.mean().item()}
         if self.updates % c.policy_delay == 0:
-            actor_loss = -self.critic.q1(b["obs"], self.actor(b["obs"])).mean()
+            pi = self.actor(b["obs"])
+            q = self.critic.q1(b["obs"], pi)
+            actor_loss = -q.mean()
+            if self.anchor is not None:
+                ref, w = self.anchor
+                dev = ((pi - ref(b["obs"]).detach()) ** 2).sum(dim=1).mean()
+                actor_loss = actor_loss + w * q.detach().abs().mean() * dev
             self.actor_opt.zero_grad()
             actor_loss.backward()
             self.actor_opt.step()
@@ -110,6 +117,35 @@ def test_updates_follow_the_plain_definition(policy_delay):
             assert info[k] == pytest.approx(info_ref[k], rel=1e-4, abs=1e-6), k
     assert agent.updates == ref.updates == 12
     _assert_same_networks(agent, ref, rtol=1e-4, atol=1e-6)
+
+
+def test_the_anchor_term_follows_its_definition_and_holds_the_actor():
+    """With an anchor the actor loss is -Q1 + w·mean|Q1|·mean‖π - π_anchor‖² (plain reference to
+    float rounding); a heavy anchor keeps the actor nearer its starting policy than none does."""
+    cfg = _cfg(policy_delay=1)
+    agent, ref = TD3(OBS, ACT, cfg, seed=4), ReferenceTD3(cfg, seed=4)
+    start = copy.deepcopy(agent.actor)
+    agent.set_anchor(start, 0.5)
+    ref.anchor = (copy.deepcopy(start).requires_grad_(False), 0.5)
+    for b in _batches(12):
+        info, info_ref = agent.update(b), ref.update(b)
+        assert info["actor_loss"] == pytest.approx(info_ref["actor_loss"], rel=1e-4, abs=1e-6)
+    _assert_same_networks(agent, ref, rtol=1e-4, atol=1e-6)
+
+    probe = torch.randn(256, OBS, generator=torch.Generator().manual_seed(1))
+    drift = {}
+    for w in (0.0, 50.0):
+        a = TD3(OBS, ACT, _cfg(policy_delay=1, actor_lr=1e-2), seed=4)
+        a.set_anchor(copy.deepcopy(a.actor), w)
+        assert (a.anchor is None) == (w == 0.0)
+        for b in _batches(60, seed=3):
+            a.update(b)
+        with torch.no_grad():
+            drift[w] = (a.actor(probe) - start(probe)).pow(2).sum(1).mean().item()
+    assert drift[50.0] < 0.25 * drift[0.0], drift
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="anchor weight"):
+            agent.set_anchor(start, bad)
 
 
 def test_info_keys_and_same_seed_same_result():

@@ -58,11 +58,12 @@ def pool_buffers(sources: list, per_run: int, capacity: int | None = None,
 
 def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, seed: int = 0,
                     progress=None, device: str = "cpu", snapshot=None,
-                    init: dict | None = None) -> tuple[TD3, dict]:
+                    init: dict | None = None, anchor: float = 0.0) -> tuple[TD3, dict]:
     """TD3 trained for ``iterations`` updates on ``buffer`` alone (no environment), its
     networks on ``device`` (a torch device, e.g. ``resolve_device("auto")``): fresh (§4.6), or
     continued from ``init`` (a ``TD3.state_dict()``; networks, targets and Adam moments, at
-    ``td3_cfg``'s learning rates). ``snapshot(done, agent)``, if given, is called after every
+    ``td3_cfg``'s learning rates; with ``anchor`` > 0 its actor is held near ``init``'s by
+    ``TD3.set_anchor``). ``snapshot(done, agent)``, if given, is called after every
     update (it decides whether to keep the agent)."""
     agent = TD3(buffer.obs_dim, buffer.act_dim, td3_cfg, seed=seed, device=device)
     if init is not None:
@@ -70,6 +71,7 @@ def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, s
         for opt, lr in ((agent.actor_opt, td3_cfg.actor_lr), (agent.critic_opt, td3_cfg.critic_lr)):
             for g in opt.param_groups:
                 g["lr"] = lr
+        agent.set_anchor(agent.actor, anchor)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0xC0]))
     losses, t0 = [], time.perf_counter()
     for it in range(int(iterations)):
@@ -160,7 +162,12 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
     base.update(batch_size=int(c["batch_size"]), actor_lr=float(c["lr"]),
                 critic_lr=float(c["lr"]), hidden=int(c["hidden"]))
     td3_cfg = TD3Config(**base).validate()
-    init = None
+    init, anchor = None, c.get("anchor") or 0.0
+    if isinstance(anchor, bool) or not isinstance(anchor, (int, float)) or not 0 <= anchor < 1e6:
+        raise ValueError(f"consolidate.anchor = {anchor!r} must be a weight in [0, 1e6) "
+                         f"(0: no anchor)")
+    if anchor and not c.get("init"):
+        raise ValueError("consolidate.anchor holds the actor near consolidate.init's: give an init")
     if c.get("init"):  # continue a consolidated agent instead of a fresh one
         ck = load_checkpoint(str(c["init"]), with_buffer=False)
         st = ck["state"]
@@ -170,7 +177,8 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
                              f"{(st['obs_dim'], st['act_dim'], st['td3']['hidden'])}, the pool "
                              f"and consolidate.hidden need {(pool.obs_dim, pool.act_dim, td3_cfg.hidden)}")
         init = ck["agent"]
-        log(f"  continuing {ck['path']} at lr {td3_cfg.actor_lr:g}")
+        log(f"  continuing {ck['path']} at lr {td3_cfg.actor_lr:g}"
+            + (f", its actor held by an anchor of weight {anchor:g}" if anchor else ""))
     bar = None
     if cfg["log"]["progress_bar"]:
         from tqdm import tqdm
@@ -202,7 +210,7 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
                          state_of(agent, info))
 
     agent, info = train_on_buffer(pool, td3_cfg, total, int(cfg["seed"]), progress, device,
-                                  snapshot if every else None, init)
+                                  snapshot if every else None, init, float(anchor))
     if bar:
         bar.close()
     log(f"  {info['iterations']} iterations in {info['seconds']:.1f} s on {device}")

@@ -18,6 +18,7 @@ batched product per layer, or one product per critic) measured no faster on the 
 from __future__ import annotations
 
 import copy
+import math
 import re
 from dataclasses import asdict, dataclass
 
@@ -140,6 +141,22 @@ class TD3:
         self._online = list(self.actor.parameters()) + list(self.critic.parameters())
         self._target = list(self.actor_target.parameters()) + list(self.critic_target.parameters())
         self.updates = 0
+        self.anchor: tuple[Actor, float] | None = None  # see set_anchor
+
+    def set_anchor(self, actor: Actor | None, weight: float = 0.0) -> None:
+        """Keep the actor near a frozen ``actor``: the actor loss gains
+        ``weight · mean|Q1| · mean‖π(s) − π_anchor(s)‖²`` (the behaviour-cloning term of TD3+BC,
+        scaled by the Q magnitude as there, towards a policy instead of the buffer's actions).
+        Used when continuing a consolidated agent, so that what the pool teaches anew (e.g. a
+        stronger lateral term) does not wash out skills the pool holds little of. ``None`` or a
+        weight of 0 removes it."""
+        if actor is None or weight == 0.0:
+            self.anchor = None
+            return
+        if not (math.isfinite(weight) and weight > 0):
+            raise ValueError(f"anchor weight = {weight!r} must be finite and > 0")
+        frozen = copy.deepcopy(actor).to(self.device).requires_grad_(False)
+        self.anchor = (frozen, float(weight))
 
     @torch.no_grad()
     def act(self, obs: np.ndarray) -> np.ndarray:
@@ -175,7 +192,14 @@ class TD3:
             q1_params = list(self.critic.q1.parameters())
             for p in q1_params:
                 p.requires_grad_(False)
-            actor_loss = -self.critic.q1(obs, self.actor(obs)).mean()
+            pi = self.actor(obs)
+            q = self.critic.q1(obs, pi)
+            actor_loss = -q.mean()
+            if self.anchor is not None:
+                ref, w = self.anchor
+                with torch.no_grad():
+                    ref_act, scale = ref(obs), q.abs().mean()
+                actor_loss = actor_loss + w * scale * (pi - ref_act).pow(2).sum(-1).mean()
             self.actor_opt.zero_grad(set_to_none=True)
             actor_loss.backward()
             for p in q1_params:
