@@ -146,6 +146,15 @@ def test_pipeline_refines_the_chosen_agent_and_chooses_again(tmp_path):
         P.load_pipeline(_pipeline(tmp_path, refine=refine))
     with pytest.raises(ValueError, match="pipeline refine"):
         P.load_pipeline(_pipeline(tmp_path, refine={"sett": []}, select={}))
+    with pytest.raises(ValueError, match="select.slope_spread_deg"):  # checked as select is
+        P.load_pipeline(_pipeline(tmp_path, refine={"select": {"slope_spread_deg": -1}}, select={}))
+    # refine.select replaces keys of select for the refined agents' choice only
+    two = P.load_pipeline(_pipeline(tmp_path, refine={"select": {"slopes_deg": [20],
+                                                                 "slope_seeds": [100, 102]}},
+                                    select={"seeds": [10, 11]}))
+    assert two["select"]["slopes_deg"] == [18.0, 22.0] and two["select"]["slope_seeds"] == [0, 1]
+    assert two["refine"]["select"]["slopes_deg"] == [20]
+    assert two["refine"]["select"]["seeds"] == [10, 11]
 
 
 def test_pipeline_resumes_an_interrupted_specialist(tmp_path):

@@ -16,8 +16,9 @@ kill resumes where it stopped:
    on every scenario is written beside it. Without a ``select`` section: seed 0's final agent.
    With a ``refine`` section, the chosen agent is then continued on the same pool (``ernest
    consolidate`` with ``consolidate.init``, the consolidation's settings and then ``refine.set``,
-   e.g. a relabelled lateral weight and a lower learning rate), its kept agents and the chosen one are judged on the same
-   validation episodes, and the best of them is the policy (``out/refined``).
+   e.g. a relabelled lateral weight and a lower learning rate), its kept agents and the chosen one
+   are judged on the validation episodes (the select section with ``refine.select``'s keys
+   replaced), and the best of them is the policy (``out/refined``).
 4. **export**: TorchScript export and weights checksum, written to the policy path atomically.
 5. **evaluate**: ``ernest reproduce`` with the new policy over ``evaluate.seeds`` seeds.
 6. **report**: learning curves against wall time (``curves.png``) and ``training.md``.
@@ -96,9 +97,14 @@ def load_pipeline(path: str) -> dict:
         r = out["refine"]
         if "select" not in out:
             raise ValueError("pipeline refine needs a select section (it refines the chosen agent)")
-        if not isinstance(r, dict) or set(r) - {"set"} or not isinstance(r.get("set", []), list):
-            raise ValueError(f"pipeline refine = {r!r}: give {{set: [consolidate.key=value, ...]}}")
+        if (not isinstance(r, dict) or set(r) - {"set", "select"}
+                or not isinstance(r.get("set", []), list)
+                or not isinstance(r.get("select", {}), dict)):
+            raise ValueError(f"pipeline refine = {r!r}: give {{set: [consolidate.key=value, ...], "
+                             f"select: {{select.key: value, ...}}}}")
         r.setdefault("set", [])
+        # the refined agents are chosen on the select section with these keys replaced
+        r["select"] = check_select({**out["select"], **(r.get("select") or {})})
     return out
 
 
@@ -293,7 +299,7 @@ def _refine_stage(cfg: dict, dirs: list[str], chosen: str, log=print) -> None:
                     *cfg["refine"]["set"]]  # refine's settings win
         log(f"      refine {chosen} ({', '.join(cfg['refine']['set'])}; log {d}.log)")
         _run(_consolidate_args(cfg, dirs, d, settings), "refine", d + ".log")
-    _chosen_table(cfg, select_policy([d], cfg["select"], d, log, extra=[chosen]), log)
+    _chosen_table(cfg, select_policy([d], cfg["refine"]["select"], d, log, extra=[chosen]), log)
 
 
 def _export(cfg: dict, consolidated: str) -> None:
