@@ -120,7 +120,7 @@ void bind_envs(py::module_& m) {
       .def_readonly("alpha", &RippleSpec::alpha)
       .def_readonly("start", &RippleSpec::start);
 
-  py::class_<Scenario>(m, "Scenario", "A generated trial: terrain, obstacles, path, start pose.")
+  py::class_<Scenario, std::shared_ptr<Scenario>>(m, "Scenario", "A generated trial: terrain, obstacles, path, start pose.")
       .def_readonly("name", &Scenario::name)
       .def_property_readonly("heights", [](const Scenario& s) { return s.terrain.heights(); },
                              "height grid (nx x ny) [m]")
@@ -216,11 +216,12 @@ void bind_envs(py::module_& m) {
                                    result_info(r, e));
            },
            "action"_a, "One policy step: (obs, reward, terminated, truncated, info).")
-      .def_property_readonly("scenario",
-                             env_getter("RoverEnv.scenario", +[](const RoverEnv& e) -> const Scenario& {
-                               return e.scenario();
-                             }),
-                             py::return_value_policy::reference_internal)
+      // Shared, not a reference into the env: reset() replaces the scenario, and a holder keeps
+      // the old one.
+      .def_property_readonly("scenario", env_getter("RoverEnv.scenario", +[](const RoverEnv& e) {
+        if (!e.shared_scenario()) throw std::logic_error("RoverEnv: call reset() first");
+        return std::const_pointer_cast<Scenario>(e.shared_scenario());
+      }), "the episode's Scenario (shared; after the next reset() it stays the old episode's)")
       .def_property_readonly("metrics", env_getter("RoverEnv.metrics", +[](const RoverEnv& e) {
         return metrics_dict(e.metrics(), e.parameters().total_mass());
       }))
@@ -238,8 +239,10 @@ void bind_envs(py::module_& m) {
       .def_property_readonly("elevation_source", env_getter("RoverEnv.elevation_source", +[](const RoverEnv& e) {
         return std::vector<int>(e.elevation().source.begin(), e.elevation().source.end());
       }), "per sample: 0 measured, 1 interpolated, 2 extrapolated, 3 unknown (hole-filling of §4.2)")
-      .def_property_readonly("mapper", &RoverEnv::mapper, py::return_value_policy::reference_internal,
-                             "the episode's perception.StereoMapper (terrain_source 'stereo'), else None")
+      .def_property_readonly("mapper", env_getter("RoverEnv.mapper", +[](const RoverEnv& e) {
+        return e.shared_mapper();
+      }), "the episode's perception.StereoMapper (terrain_source 'stereo'), else None; shared: "
+          "after the next reset() it is a detached pipeline of the old episode")
       .def_property_readonly("fts", env_getter("RoverEnv.fts", +[](const RoverEnv& e) { return e.fts(); }), "last processed force–torque values (4 x 6)")
       .def_property_readonly("fts_bias", env_getter("RoverEnv.fts_bias", +[](const RoverEnv& e) { return e.fts_bias(); }))
       .def_property_readonly("current_action", env_getter("RoverEnv.current_action", +[](const RoverEnv& e) {

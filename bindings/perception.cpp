@@ -246,7 +246,7 @@ void bind_perception(py::module_& m) {
                              [](const StereoFrame& f) { return Eigen::Matrix4d(f.left_pose.matrix()); })
       .def_readonly("stats", &StereoFrame::stats);
 
-  py::class_<StereoMapper>(m, "StereoMapper",
+  py::class_<StereoMapper, std::shared_ptr<StereoMapper>>(m, "StereoMapper",
                            "Render, match (StereoBM) and fuse at the fusion rate (§2.4 pipeline).")
       .def(py::init<const dynamics::HeightMap&, const std::vector<dynamics::BoxObstacle>&,
                     const StereoMapperOptions&>(),

@@ -127,7 +127,7 @@ sensing::ObservationVector RoverEnv::reset_next() { return start_episode(episode
 
 sensing::ObservationVector RoverEnv::start_episode(std::uint64_t seed) {
   episode_seed_ = seed;
-  scenario_ = std::make_unique<Scenario>(generate_scenario(options_.scenario, seed));
+  scenario_ = std::make_shared<const Scenario>(generate_scenario(options_.scenario, seed));
   dynamics::SimOptions so = sim_options_;
   so.seed = seed;
   so.friction = scenario_->friction;
@@ -141,7 +141,7 @@ sensing::ObservationVector RoverEnv::start_episode(std::uint64_t seed) {
   if (options_.terrain_source == "stereo") {
     perception::StereoMapperOptions mo = options_.stereo;
     mo.render.seed ^= seed;  // texture and sensor noise follow the episode seed (deterministic)
-    mapper_ = std::make_unique<perception::StereoMapper>(scenario_->terrain, scenario_->obstacles, mo);
+    mapper_ = std::make_shared<perception::StereoMapper>(scenario_->terrain, scenario_->obstacles, mo);
   }
   duration_ = options_.episode_duration > 0.0 ? options_.episode_duration
                                               : scenario_->episode_duration;

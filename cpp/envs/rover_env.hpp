@@ -101,6 +101,9 @@ class RoverEnv {
   StepResult step(const sensing::ActionVector& action);
 
   const Scenario& scenario() const;
+  /// The current episode's scenario, shared: a holder keeps it after the next reset() replaces
+  /// it. Null before the first reset().
+  std::shared_ptr<const Scenario> shared_scenario() const { return scenario_; }
   const dynamics::RoverSim& sim() const;
   dynamics::RoverSim& sim();
   /// The current episode's simulator, shared: a holder may command and step it directly (e.g.
@@ -120,6 +123,8 @@ class RoverEnv {
   const sensing::ElevationSampler& sampler() const { return sampler_; }
   /// The stereo pipeline of the current episode (terrain_source "stereo"), else nullptr.
   const perception::StereoMapper* mapper() const { return mapper_.get(); }
+  /// The same, shared: a holder keeps the old episode's pipeline after the next reset().
+  std::shared_ptr<perception::StereoMapper> shared_mapper() const { return mapper_; }
   /// Physics steps per policy step.
   int substeps() const { return substeps_; }
 
@@ -132,10 +137,10 @@ class RoverEnv {
   dynamics::RoverParameters params_;
   EnvOptions options_;
   dynamics::SimOptions sim_options_;
-  std::unique_ptr<Scenario> scenario_;
+  std::shared_ptr<const Scenario> scenario_;
   std::shared_ptr<dynamics::RoverSim> sim_;
   std::unique_ptr<TerrainHeightSource> heights_;
-  std::unique_ptr<perception::StereoMapper> mapper_;
+  std::shared_ptr<perception::StereoMapper> mapper_;
   sensing::FtsProcessor fts_filter_;
   sensing::ElevationSampler sampler_;
   sensing::Wrenches bias_ = sensing::Wrenches::Zero();
