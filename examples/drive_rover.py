@@ -22,8 +22,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ernest_cpp import dynamics as D  # noqa: E402
-from ernest_cpp import soil as S  # noqa: E402
-from ernest_cpp import envs  # noqa: E402
 
 
 def main() -> None:
@@ -36,11 +34,7 @@ def main() -> None:
     os.makedirs(args.out, exist_ok=True)
 
     rocks = D.rock_field(20, seed=args.seed)
-    # The environments' slip regularisation (eq 12): under Table 2's eps_slip = 100 the wheels
-    # barely grip (docs/soil.md).
-    soil = S.soil_preset("m90")
-    soil.eps_slip = envs.make_options().eps_slip
-    sim = D.make_sim("soil", soil=soil, obstacles=rocks)
+    sim = D.make_sim("soil", soil="m90", obstacles=rocks)  # the environments' soil (docs/soil.md)
     sim.reset(0.0, 0.0, 0.0, speed=args.speed)
     control_dt = 0.1  # re-run the synchroniser every 0.1 s, as the onboard loop does
     steps = max(1, round(control_dt / sim.options.dt))

@@ -211,3 +211,19 @@ def test_sparse_constraint_solver_runs_inside_the_module_and_agrees_with_ode():
     assert sparse.dense_solves <= 0.1 * (sparse.sparse_solves + sparse.dense_solves)
     assert dense.sparse_solves == 0 and dense.dense_solves >= 40
     assert "sparse_solves" in repr(sparse)
+
+
+def test_make_sim_default_soil_drives_like_the_environments():
+    # make_sim's preset soil is the environments' (eps_slip, eps_motion from EnvOptions), under
+    # which the rover drives from rest; Table 2's own values stay one call away.
+    from ernest_cpp import envs, soil as S
+    sim = D.make_sim()
+    env = envs.make_options()
+    assert sim.options.soil.eps_slip == env.eps_slip
+    assert sim.options.soil.eps_motion == env.eps_motion
+    assert D.make_options(soil=S.soil_preset("m90")).soil.eps_slip == S.soil_preset("m90").eps_slip
+    sim.reset(0.0, 0.0, 0.0)
+    for _ in range(60):  # 6 s at 0.15 m/s, the synchroniser re-run every 0.1 s
+        sim.set_commands(D.sync_commands(sim, 0.15))
+        sim.step_n(round(0.1 / sim.options.dt))
+    assert sim.state.position[0] > 0.5  # 0.9 m commanded; Table 2's eps_slip gives 2 cm

@@ -6,10 +6,12 @@ with ODE's collider: both touch it, stop at the same place to within the contact
 import numpy as np
 
 from ernest_cpp import dynamics as D
+from ernest_cpp.soil import soil_preset
 
 
 def _drive(contact, steps: int = 400):
-    o = D.make_options("soil", friction=0.8)
+    # Table 2's soil as printed (eps_slip 100): the scenario these figures were measured on
+    o = D.make_options("soil", soil=soil_preset("m90"), friction=0.8)
     o.wheel_obstacle_contact = contact
     # a rock 0.16 m high across the left wheels' path: they climb or stall against it
     rock = [D.BoxObstacle(np.array([0.75, 0.35, 0.0]), np.array([0.12, 0.3, 0.16]), 0.2, 0.0, 0.0)]
