@@ -120,7 +120,35 @@ void bind_perception_selfimage(py::module_& m) {
            "Segment a depth map [m] (+inf = no return) of the camera's size; ValueError on NaN, "
            "z <= 0 or a wrong size.")
       .def_property_readonly("options", &SelfImageSegmenter::options);
-  m.def("mask_iou", &mask_iou, "a"_a, "b"_a, "Intersection over union of two 0/1 masks.");
+  m.def(
+      "mask_iou",
+      [](const py::array& a, const py::array& b) {
+        // A float mask would be truncated to 0 silently (0.3 -> 0): masks are bool or 0/1 integers.
+        const auto as_mask = [](const py::array& x, const char* name) {
+          const char kind = x.dtype().kind();
+          if (kind != 'b' && kind != 'u' && kind != 'i') {
+            throw py::type_error(std::string("mask_iou: ") + name +
+                                 " must be a bool or integer 0/1 mask, got dtype " +
+                                 py::str(x.dtype()).cast<std::string>());
+          }
+          if (x.ndim() != 2) {
+            throw std::invalid_argument(std::string("mask_iou: ") + name + " must be 2-D");
+          }
+          const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast> v(x);
+          MaskImage m(v.shape(0), v.shape(1));
+          const std::int64_t* d = v.data();
+          for (Eigen::Index i = 0; i < m.size(); ++i) {
+            if (d[i] != 0 && d[i] != 1) {
+              throw std::invalid_argument(std::string("mask_iou: ") + name +
+                                          " must hold only 0 and 1, got " + std::to_string(d[i]));
+            }
+            m.data()[i] = static_cast<std::uint8_t>(d[i]);
+          }
+          return m;
+        };
+        return mask_iou(as_mask(a, "a"), as_mask(b, "b"));
+      },
+      "a"_a, "b"_a, "Intersection over union of two 0/1 masks (bool or integer).");
   m.def(
       "depth_to_points",
       [](const FloatImage& depth, const StereoCameraParameters& camera, const MaskImage& removed,

@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "ernest/common/validation.hpp"
 #include "ernest/soil/bekker_wong.hpp"
 #include "ernest/soil/rigid_contact.hpp"
 #include "ernest/soil/single_wheel.hpp"
@@ -118,7 +119,15 @@ void bind_soil(py::module_& m) {
       .def_property_readonly("points_per_panel", &BekkerWongModel::points_per_panel);
   m.attr("DEFAULT_POINTS_PER_PANEL") = BekkerWongModel::kDefaultPointsPerPanel;
 
-  m.def("slip_ratio", &slip_ratio, "vx"_a, "vcx"_a, "eps_slip"_a, "clamp_first"_a = true,
+  m.def("slip_ratio",
+        [](double vx, double vcx, double eps_slip, bool clamp_first) {
+          // Checked here, not in slip_ratio itself: the simulator calls it per wheel and step.
+          ernest::require_finite("slip_ratio", "vx", vx);
+          ernest::require_finite("slip_ratio", "vcx", vcx);
+          ernest::require_in_range("slip_ratio", "eps_slip", eps_slip, 0.0, ernest::kInf);
+          return slip_ratio(vx, vcx, eps_slip, clamp_first);
+        },
+        "vx"_a, "vcx"_a, "eps_slip"_a, "clamp_first"_a = true,
         "Regularised slip ratio of eq 12, clamped to [-1, 1] (clamp_first: see "
         "SoilParameters.slip_clamp_first).");
 

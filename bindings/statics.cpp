@@ -60,6 +60,14 @@ Eigen::Vector3d vec3(const Array& a, const char* field) {
   return {r(0), r(1), r(2)};
 }
 
+// A point a function computes with: NaN or inf is refused here (struct setters take any value and
+// the solvers check it).
+Eigen::Vector3d finite3(const Array& a, const char* field) {
+  const Eigen::Vector3d v = vec3(a, field);
+  if (!v.allFinite()) throw std::invalid_argument(std::string(field) + " must be finite");
+  return v;
+}
+
 Eigen::VectorXd vecn(const Array& a, const char* field) {
   if (a.ndim() != 1) {
     throw std::invalid_argument(std::string(field) + " must be 1-D, got " + shape_of(a));
@@ -156,7 +164,8 @@ void bind_stability(py::module_& m) {
   m.def(
       "nesm_edge",
       [](const Array& a, const Array& b, const Array& cg, const Array& up, bool inside) {
-        return nesm_edge(vec3(a, "a"), vec3(b, "b"), vec3(cg, "cg"), vec3(up, "up"), inside);
+        return nesm_edge(finite3(a, "a"), finite3(b, "b"), finite3(cg, "cg"), finite3(up, "up"),
+                         inside);
       },
       "a"_a, "b"_a, "cg"_a, "up"_a, "inside"_a,
       "Hirose's normalized energy stability level [m] of the tipping axis through a and b: "

@@ -19,6 +19,7 @@ void MotorParameters::validate(const char* owner) const {
 
 MotorElectrical motor_electrical(const MotorParameters& m, double output_torque,
                                  double output_speed) {
+  m.validate("MotorParameters");  // a zero torque constant would divide by zero
   const double n = m.gear_ratio, eta = m.efficiency;
   const bool motoring = output_torque * output_speed >= 0.0;
   const double rotor_torque = motoring ? output_torque / (n * eta) : output_torque * eta / n;

@@ -33,8 +33,10 @@ void PlannerOptions::validate() const {
 }
 
 double path_length(const Eigen::Ref<const Eigen::MatrixXd>& path) {
+  require(path.allFinite(), "path_length: path must be finite");
   double l = 0.0;
   for (Eigen::Index k = 1; k < path.cols(); ++k) l += (path.col(k) - path.col(k - 1)).norm();
+  require(std::isfinite(l), "path_length: the length of path overflows");
   return l;
 }
 

@@ -27,12 +27,14 @@ Gait::Gait(std::string name, double period, Eigen::VectorXd offset, Eigen::Vecto
 }
 
 void Gait::evaluate(int j, double t, double& q, double& dq, double& ddq) const {
+  require(std::isfinite(t), "Gait: the phase time t must be finite");
   const double w = 2.0 * M_PI / period_;
   const double a = w * t + phase_[j];
   const double s = std::sin(a), c = std::cos(a);
   q = offset_[j] + amplitude_[j] * s;
   dq = amplitude_[j] * w * c;
   ddq = -amplitude_[j] * w * w * s;
+  require(std::isfinite(ddq), "Gait: the acceleration overflows (period too small)");
 }
 
 Eigen::VectorXd Gait::position(double t) const {

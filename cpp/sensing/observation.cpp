@@ -36,6 +36,7 @@ ObservationVector ObservationScales::divisors() const {
 }
 
 ObservationVector build_observation(const ObservationInputs& in, const ObservationScales& scales) {
+  scales.validate();  // a zero or non-finite divisor would make the observation inf or NaN
   ObservationVector raw;
   raw.head<6>() << in.heading_deviation, in.lateral_deviation, in.roll, in.pitch, in.gimbal_yaw,
       in.gimbal_roll;
@@ -72,6 +73,7 @@ void ActionLimits::validate() const {
 
 Eigen::Vector3d action_to_command(const ActionVector& action, const ActionLimits& limits) {
   require(action.allFinite(), "action_to_command: action must be finite");
+  limits.validate();
   const ActionVector a = action.cwiseMax(-1.0).cwiseMin(1.0);
   return {0.5 * (a[0] + 1.0) * limits.vx_max, a[1] * limits.yaw_rate_max,
           a[2] * limits.roll_rate_max};
@@ -79,6 +81,7 @@ Eigen::Vector3d action_to_command(const ActionVector& action, const ActionLimits
 
 ActionVector command_to_action(const Eigen::Vector3d& command, const ActionLimits& limits) {
   require(command.allFinite(), "command_to_action: command must be finite");
+  limits.validate();  // a zero limit would divide by zero
   const ActionVector a(2.0 * command[0] / limits.vx_max - 1.0, command[1] / limits.yaw_rate_max,
                        command[2] / limits.roll_rate_max);
   return a.cwiseMax(-1.0).cwiseMin(1.0);

@@ -58,6 +58,9 @@ def controllers(policy_file: str | None):
             # the exported module takes physical observations and returns (Vx, yaw rate, roll rate)
             with torch.no_grad():
                 cmd = module(torch.as_tensor(obs * scale, dtype=torch.float32)).numpy()
+            if not np.all(np.isfinite(cmd)):
+                raise ValueError(f"{policy_file}: the policy returned a non-finite command "
+                                 f"{cmd.tolist()} for a finite observation")
             return sensing.command_to_action(cmd.astype(np.float64))
 
         out[LEARNED] = (learned, False)

@@ -160,8 +160,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=__doc__)
     p.add_argument("--out", type=Path, default=Path("out/footfall"))
     p.add_argument("--seed", type=_args.seed, default=3, help="rock field and planner seed")
-    p.add_argument("--cell", type=float, default=0.02, help="stability map cell [m]")
-    p.add_argument("--rocks", type=int, default=60)
+    p.add_argument("--cell", type=_args.in_range(0.005, 0.5), default=0.02,
+                   help="stability map cell [m], 0.005 to 0.5")
+    p.add_argument("--rocks", type=_args.in_range(0, 10**6, int), default=60)
     p.add_argument("--terrain", choices=footfall_terrain.SOURCES, default="truth",
                    help="planner's DEM: the simulator's ground truth or the stereo-fused map")
     p.add_argument("--no-variants", dest="variants", action="store_false",
@@ -170,8 +171,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _main(args: argparse.Namespace) -> int:
-    if not (0.005 <= args.cell <= 0.5) or args.rocks < 0:
-        raise SystemExit("ernest footfall: need 0.005 <= --cell <= 0.5 and --rocks >= 0")
     r = run(args.out, args.seed, args.cell, args.rocks, args.variants, terrain_source=args.terrain)
     c = r["cycle"]["compensated"]
     gif = "footfall_cycle.gif and " if r["cycle"]["gif_frames"] else ""

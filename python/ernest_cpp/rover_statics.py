@@ -275,6 +275,9 @@ def step_liftoff(args: argparse.Namespace, out_dir: str) -> list[str]:
     return lines
 
 
+#: The policy of the liftoff step when --policy is not given.
+DEFAULT_POLICY = "policies/ernest_default.pt"
+
 #: The steps of ``ernest statics``, in order: (name, function(args, out_dir) -> report lines).
 #: The first four are FootFall's (seed 003, SDM-B model); the last two ERNEST's (seed 004).
 STEPS = [("stability", walker_statics.step_stability), ("sag", walker_statics.step_sag),
@@ -296,6 +299,15 @@ def main_args(args: argparse.Namespace) -> int:
         raise ValueError(f"--noise must be >= 0, got {args.noise}")
     if not (args.stride > 0 and math.isfinite(args.stride)):
         raise ValueError(f"--stride must be > 0, got {args.stride}")
+    # Only the default policy may be missing (the plot goes without it); one named on the command
+    # line must exist and be used by a step that is run ("" means none).
+    if args.policy is None:
+        args.policy = DEFAULT_POLICY
+    elif args.policy:
+        if "liftoff" not in names:
+            raise ValueError("--policy is used only by the liftoff step, which --steps leaves out")
+        if not os.path.isfile(args.policy):
+            raise ValueError(f"--policy {args.policy}: no such file")
     os.makedirs(args.out, exist_ok=True)
     lines = ["# Statics", "", "Seed 003 (FootFall, ATHLETE SDM-B model) and seed 004 (ERNEST); "
              "steps: " + ", ".join(names) + ".", ""]
@@ -316,9 +328,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--out", default="out/statics", help="output folder (default out/statics)")
     p.add_argument("--steps", default="",
                    help=f"comma-separated steps (default all: {', '.join(n for n, _ in STEPS)})")
-    p.add_argument("--policy", default="policies/ernest_default.pt",
-                   help="learned policy whose slope ascent is plotted against the limit "
-                        "(skipped if the file does not exist)")
+    p.add_argument("--policy", default=None,
+                   help="learned policy whose slope ascent is plotted against the limit (default "
+                        f"{DEFAULT_POLICY}, skipped if that file does not exist; a named file "
+                        "must exist; \"\" for none)")
     p.add_argument("--episode-length", type=float, default=None,
                    help="seconds of the policy's SlopeEval-v0 episode (default: the env's 60)")
     p.add_argument("--noise", type=float, default=10.0,

@@ -162,11 +162,13 @@ def _plot(runs: list[dict], out_dir: str, tag: str) -> list[str]:
 
 
 def main_args(args: argparse.Namespace) -> int:
-    os.makedirs(args.out, exist_ok=True)
     soils = [x.strip() for x in args.soils.split(",") if x.strip()]
+    if not soils:
+        raise ValueError(f"--soils = {args.soils!r} names no soil (m90, dry_sand, wet_sand)")
     for soil in soils:
         if soil not in ("m90", "dry_sand", "wet_sand"):
             raise ValueError(f"unknown soil {soil!r} (m90, dry_sand, wet_sand)")
+    os.makedirs(args.out, exist_ok=True)
     lines = [f"# {SLOPE_DEG:.0f}° slope, {args.duration:.0f} s at Vx = {args.vx} m/s "
              "(travel reduction and cost of transport as in seed 004 Table 6)", "",
              "| soil | controller | expected [m] | actual [m] | travel reduction [%] | energy [J] | "

@@ -11,17 +11,8 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from .._core import envs as _envs
-from .core import ErnestEnv, check_reset_options
-
-
-def _check_seed(seed, name: str, room: int = 0) -> int:
-    """seed as an int in [0, 2**64 - 1 - room] (the C++ seeds are uint64), else ValueError."""
-    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
-        raise ValueError(f"{name} = {seed!r} must be an integer in [0, {2**64 - 1 - room}]")
-    value = int(seed)
-    if not 0 <= value <= 2**64 - 1 - room:
-        raise ValueError(f"{name} = {value} is outside the allowed range [0, {2**64 - 1 - room}]")
-    return value
+from .core import ErnestEnv, as_actions, check_reset_options
+from .core import check_seed as _check_seed
 
 
 class ErnestVectorEnv(gym.vector.VectorEnv):
@@ -73,9 +64,10 @@ class ErnestVectorEnv(gym.vector.VectorEnv):
     def step(self, actions):
         if not self._started:  # like the single env, instead of an implicit autoreset
             raise RuntimeError("ErnestVectorEnv.step: call reset() first")
-        a = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
-        if a.shape[1] != 3:
+        a = as_actions(actions, "actions")
+        if a.size != self.num_envs * 3:
             raise ValueError(f"actions must be ({self.num_envs}, 3), got {np.shape(actions)}")
+        a = a.reshape(self.num_envs, 3)
         obs, reward, terminated, truncated, info = self.core.step(a)
         return obs.astype(np.float32), reward, terminated, truncated, info
 
