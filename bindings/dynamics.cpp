@@ -4,6 +4,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <optional>
+
 #include "bindings.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/dynamics/batch_stepper.hpp"
@@ -185,7 +187,19 @@ void bind_dynamics(py::module_& m) {
       .def_readwrite("soil_normal_damping", &SimOptions::soil_normal_damping,
                      "soil normal damping [N s/m per wheel]: F_n = max(0, F_z - c v_n) (assumption)")
       .def_readwrite("rigid", &SimOptions::rigid, "ernest_cpp.soil.RigidContactParameters")
-      .def_readwrite("friction", &SimOptions::friction, "< 0 draws it from rigid with the seed")
+      // Python sees None for "drawn", not the C++ struct's negative marker, and a set value
+      // must be a real coefficient.
+      .def_property(
+          "friction",
+          [](const SimOptions& o) -> std::optional<double> {
+            return o.friction < 0.0 ? std::nullopt : std::optional<double>(o.friction);
+          },
+          [](SimOptions& o, std::optional<double> mu) {
+            if (mu) ernest::require_in_range("SimOptions", "friction", *mu, 0.0, 10.0);
+            o.friction = mu ? *mu : -1.0;
+          },
+          "Coulomb friction of the obstacles and rigid ground, [0, 10]; None (default) draws it "
+          "from rigid with the seed")
       .def_readwrite("rigid_slip", &SimOptions::rigid_slip,
                      "tyre creep on rigid obstacles [(m/s)/N] (assumption)")
       .def_readwrite("rigid_tyre_stiffness_x", &SimOptions::rigid_tyre_stiffness_x,

@@ -110,8 +110,8 @@ void bind_envs(py::module_& m) {
                      "Bickler trap: depth of the row along the path [m], 0.05..0.6 (less than the "
                      "0.86 m wheelbase: the rover straddles it)")
       .def_readwrite("obstacle_friction", &ScenarioOptions::obstacle_friction,
-                     "Coulomb friction of the obstacles and rigid ground; <= 0 (default) draws it "
-                     "from Table 3's [0.5, 0.9] each trial, > 0 (at most 2) fixes it")
+                     "Coulomb friction of the obstacles and rigid ground, (0, 2]; None (default) "
+                     "draws it from Table 3's [0.5, 0.9] each trial")
       .def("validate", &ScenarioOptions::validate, "Raise ValueError on an invalid field.");
 
   py::class_<RippleSpec>(m, "RippleSpec", "One ripple of eq 39.")
@@ -165,16 +165,16 @@ void bind_envs(py::module_& m) {
       .def_readwrite("scenario", &EnvOptions::scenario)
       .def_readwrite("soil", &EnvOptions::soil, "'dry_sand', 'm90' or 'wet_sand'")
       .def_readwrite("rigid_ground", &EnvOptions::rigid_ground)
-      .def_readwrite("eps_slip", &EnvOptions::eps_slip, "eq 12 regularisation [(m/s)^-2]")
-      .def_readwrite("eps_motion", &EnvOptions::eps_motion, "eq 16 rest threshold [m/s]")
+      .def_readwrite("eps_slip", &EnvOptions::eps_slip, "eq 12 regularisation [(m/s)^-2], > 0; None: the soil preset's")
+      .def_readwrite("eps_motion", &EnvOptions::eps_motion, "eq 16 rest threshold [m/s], > 0; None: the soil preset's")
       .def_readwrite("passive", &EnvOptions::passive, "gimbal off, clutch open")
-      .def_readwrite("physics_dt", &EnvOptions::physics_dt, "[s], 0 = simulator default")
+      .def_readwrite("physics_dt", &EnvOptions::physics_dt, "[s], (0, 0.05]; None: the simulator's default")
       .def_readwrite("slip_force_tolerance", &EnvOptions::slip_force_tolerance,
-                     "implicit slip tolerance (SimOptions.slip_force_tolerance), 0 = simulator default")
+                     "implicit slip tolerance (SimOptions.slip_force_tolerance); None: its default")
       .def_readwrite("obstacle_substeps", &EnvOptions::obstacle_substeps,
-                     "substeps while touching an obstacle (SimOptions.obstacle_substeps), 0 = simulator default")
+                     "substeps while touching an obstacle (SimOptions.obstacle_substeps), 1..64; None: its default")
       .def_readwrite("policy_dt", &EnvOptions::policy_dt, "[s]")
-      .def_readwrite("episode_duration", &EnvOptions::episode_duration, "[s], 0 = scenario's")
+      .def_readwrite("episode_duration", &EnvOptions::episode_duration, "[s], (0, 3600]; None: the scenario's")
       .def_readwrite("sync_rate", &EnvOptions::sync_rate, "[Hz]")
       .def_readwrite("fts_noise_force", &EnvOptions::fts_noise_force, "[N]")
       .def_readwrite("fts_noise_torque", &EnvOptions::fts_noise_torque, "[N m]")

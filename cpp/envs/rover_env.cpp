@@ -14,18 +14,31 @@ void EnvOptions::validate() const {
   const char* o = "EnvOptions";
   scenario.validate();
   soil::SoilParameters::preset(soil);  // throws naming the allowed presets
-  require_in_range(o, "physics_dt", physics_dt, 0.0, 0.05);
-  require_in_range(o, "slip_force_tolerance", slip_force_tolerance, 0.0, 1e9);
-  require_in_range(o, "obstacle_substeps", obstacle_substeps, 0, 64);
+  // Optional fields: unset means "the default"; set, a value must be a real one (no 0 sentinel).
+  if (physics_dt) {
+    require_positive(o, "physics_dt", *physics_dt);
+    require_in_range(o, "physics_dt", *physics_dt, 0.0, 0.05);
+  }
+  if (slip_force_tolerance) require_in_range(o, "slip_force_tolerance", *slip_force_tolerance, 1e-6, 1e9);
+  if (obstacle_substeps) require_in_range(o, "obstacle_substeps", *obstacle_substeps, 1, 64);
   require_in_range(o, "policy_dt", policy_dt, 0.01, 5.0);
-  require_in_range(o, "episode_duration", episode_duration, 0.0, 3600.0);
+  if (episode_duration) {
+    require_positive(o, "episode_duration", *episode_duration);
+    require_in_range(o, "episode_duration", *episode_duration, 0.0, 3600.0);
+  }
   require_in_range(o, "sync_rate", sync_rate, 1.0, 1e4);
   fts.validate();
   require_in_range(o, "fts_noise_force", fts_noise_force, 0.0, 1e3);
   require_in_range(o, "fts_noise_torque", fts_noise_torque, 0.0, 1e3);
   require_in_range(o, "start_speed", start_speed, 0.0, 0.5);
-  require_in_range(o, "eps_slip", eps_slip, -1.0, 1e8);
-  require_in_range(o, "eps_motion", eps_motion, -1.0, 1.0);
+  if (eps_slip) {
+    require_positive(o, "eps_slip", *eps_slip);
+    require_in_range(o, "eps_slip", *eps_slip, 0.0, 1e8);
+  }
+  if (eps_motion) {
+    require_positive(o, "eps_motion", *eps_motion);
+    require_in_range(o, "eps_motion", *eps_motion, 0.0, 1.0);
+  }
   require(terrain_source == "truth" || terrain_source == "stereo",
           "EnvOptions.terrain_source = '" + terrain_source + "'; allowed: 'truth', 'stereo'");
   if (terrain_source == "stereo") stereo.validate();
@@ -48,11 +61,11 @@ RoverEnv::RoverEnv(const dynamics::RoverParameters& params, const EnvOptions& op
   options_.validate();
   sim_options_.ground = options_.rigid_ground ? dynamics::GroundType::Rigid : dynamics::GroundType::Soil;
   sim_options_.soil = soil::SoilParameters::preset(options_.soil);
-  if (options_.eps_slip > 0.0) sim_options_.soil.eps_slip = options_.eps_slip;
-  if (options_.eps_motion > 0.0) sim_options_.soil.eps_motion = options_.eps_motion;
-  if (options_.physics_dt > 0.0) sim_options_.dt = options_.physics_dt;
-  if (options_.slip_force_tolerance > 0.0) sim_options_.slip_force_tolerance = options_.slip_force_tolerance;
-  if (options_.obstacle_substeps > 0) sim_options_.obstacle_substeps = options_.obstacle_substeps;
+  if (options_.eps_slip) sim_options_.soil.eps_slip = *options_.eps_slip;
+  if (options_.eps_motion) sim_options_.soil.eps_motion = *options_.eps_motion;
+  if (options_.physics_dt) sim_options_.dt = *options_.physics_dt;
+  if (options_.slip_force_tolerance) sim_options_.slip_force_tolerance = *options_.slip_force_tolerance;
+  if (options_.obstacle_substeps) sim_options_.obstacle_substeps = *options_.obstacle_substeps;
   sim_options_.validate();
   const double dt = sim_options_.dt;
   substeps_ = static_cast<int>(std::lround(options_.policy_dt / dt));
@@ -143,8 +156,7 @@ sensing::ObservationVector RoverEnv::start_episode(std::uint64_t seed) {
     mo.render.seed ^= seed;  // texture and sensor noise follow the episode seed (deterministic)
     mapper_ = std::make_shared<perception::StereoMapper>(scenario_->terrain, scenario_->obstacles, mo);
   }
-  duration_ = options_.episode_duration > 0.0 ? options_.episode_duration
-                                              : scenario_->episode_duration;
+  duration_ = options_.episode_duration.value_or(scenario_->episode_duration);
   noise_rng_.seed(seed ^ 0x9E3779B97F4A7C15ULL);
   fts_filter_.reset(read_fts(sim_->state()));
   action_ = sensing::command_to_action(Eigen::Vector3d::Zero(), options_.limits);  // standing still

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "ernest/dynamics/rover_parameters.hpp"
@@ -24,26 +25,27 @@ struct EnvOptions {
   ScenarioOptions scenario{};       ///< scenario kind and generation settings
   std::string soil = "m90";         ///< soil preset on the height map (Table 2 or our wet sand)
   bool rigid_ground = false;        ///< hard ground instead of soil (tests, debugging)
-  /// eq 12 slip regularisation eps_slip [(m/s)^-2] used by the environments; <= 0 keeps the soil
-  /// preset's (Table 2: 100). Ours: with 100 the factor 1 - exp(-eps v_x^2) regularises ERNEST's
+  /// eq 12 slip regularisation eps_slip [(m/s)^-2] used by the environments, > 0; nullopt keeps
+  /// the soil preset's (Table 2: 100). Ours: with 100 the factor 1 - exp(-eps v_x^2) regularises ERNEST's
   /// whole 0–0.2 m/s range, so a wheel starting from rest on M90 gets no slip-driven traction and
   /// the rover stalls (97 % travel reduction on flat M90 from rest, measured); 1e4 confines it to
   /// |v_x| < ~1 cm/s, and results no longer change with it (1e4 and 1e5 agree to 3 digits).
   /// Table 2 marks the eps values as chosen for integrator performance. See benchmarks/RESULTS.md.
-  double eps_slip = 1e4;
-  /// eq 16 rest threshold eps_motion [m/s] used by the environments; <= 0 keeps the preset's
+  std::optional<double> eps_slip = 1e4;
+  /// eq 16 rest threshold eps_motion [m/s] used by the environments, > 0; nullopt keeps the preset's
   /// (Table 2: 5e-5). Ours: 0.01 m/s, Table 2's own eps_contact, so "at rest" has the same speed
   /// scale as the shear regularisation of eqs 28–29. With 5e-5 to 5e-3 a rover held at rest on
   /// M90 by the wheel synchroniser settles into a stick–slip cycle between the rest and moving
   /// stress shapes (wheel-load std 15–28 N, measured); with 0.01 it is still, and driving at
   /// 0.1–0.2 m/s is unchanged to the millimetre. See benchmarks/RESULTS.md.
-  double eps_motion = 0.01;
+  std::optional<double> eps_motion = 0.01;
   bool passive = false;             ///< passive bogie: gimbal off, clutch open (§5, Table 6)
-  double physics_dt = 0.0;          ///< [s]; 0 = the simulator's default step
-  double slip_force_tolerance = 0.0;      ///< SimOptions::slip_force_tolerance; 0 = the simulator's default
-  int obstacle_substeps = 0;        ///< SimOptions::obstacle_substeps; 0 = the simulator's default
+  std::optional<double> physics_dt;            ///< [s], (0, 0.05]; nullopt: the simulator's default
+  std::optional<double> slip_force_tolerance;  ///< SimOptions::slip_force_tolerance; nullopt: its default
+  std::optional<int> obstacle_substeps;        ///< SimOptions::obstacle_substeps; nullopt: its default
   double policy_dt = 0.5;           ///< [s], 2 Hz (Table 5)
-  double episode_duration = 0.0;    ///< [s]; 0 = the scenario's (30 s step, 60 s otherwise)
+  /// [s], (0, 3600]; nullopt: the scenario's (30 s step, 60 s otherwise)
+  std::optional<double> episode_duration;
   double sync_rate = 50.0;          ///< wheel synchroniser rate [Hz] (at most the physics rate)
   sensing::FtsFilterOptions fts{};  ///< 400 Hz, 0.5 Hz cutoff
   /// Gaussian noise added to the processed force–torque values in the observation [N, N m]

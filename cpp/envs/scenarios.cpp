@@ -125,7 +125,10 @@ void ScenarioOptions::validate() const {
   require_in_range(o, "bickler_height", bickler_height, 0.02, 0.5);
   // straddled: the front wheels (0.34 m) must fit beyond the rocks while the rear ones are before
   require_in_range(o, "bickler_depth", bickler_depth, 0.05, 0.6);
-  require_in_range(o, "obstacle_friction", obstacle_friction, -kInf, 2.0);  // <= 0: drawn
+  if (obstacle_friction) {
+    require_positive(o, "obstacle_friction", *obstacle_friction);
+    require_in_range(o, "obstacle_friction", *obstacle_friction, 0.0, 2.0);
+  }
 }
 
 double ripple_height(double x, double a, double lambda, double alpha) {
@@ -286,7 +289,7 @@ Scenario generate_scenario(const ScenarioOptions& options, std::uint64_t seed) {
     slope_height(0.0, s_start, s_angle, s_bs, s_be, s_len, &s.peak_slope, &s.slope_direct);
   }
   s.friction = rng.uniform(0.5, 0.9);  // Table 3 contacts (drawn always: same later draws)
-  if (options.obstacle_friction > 0.0) s.friction = options.obstacle_friction;
+  if (options.obstacle_friction) s.friction = *options.obstacle_friction;
   place_path(s, e, heading, lateral, yaw);
 
   switch (kind) {

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,9 +48,9 @@ struct ScenarioOptions {
   /// course chosen with benchmarks/bench_bickler_scan.py (see scenarios.cpp).
   double bickler_height = 0.09;
   double bickler_depth = 0.3;
-  /// Coulomb friction of the obstacles (and of rigid ground); <= 0 draws it from Table 3's
-  /// [0.5, 0.9] each trial (the default), > 0 fixes it (scans, tests).
-  double obstacle_friction = 0.0;
+  /// Coulomb friction of the obstacles (and of rigid ground), (0, 2]; nullopt (the default)
+  /// draws it from Table 3's [0.5, 0.9] each trial; a value fixes it (scans, tests).
+  std::optional<double> obstacle_friction;
   void validate() const;
 };
 

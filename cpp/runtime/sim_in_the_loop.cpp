@@ -61,7 +61,7 @@ EpisodeReport run_onboard_episode(envs::RoverEnv& env, Policy& policy, std::uint
   loop.set_fts_bias(env.fts_bias());
   loop.set_telemetry(telemetry);
   const double duration =
-      env.options().episode_duration > 0.0 ? env.options().episode_duration : sc.episode_duration;
+      env.options().episode_duration.value_or(sc.episode_duration);
   const long per_policy = std::lround(opts.sensor_rate / opts.policy_rate);
   const long total = std::lround(duration * opts.sensor_rate);
   const double start = sc.path.arc_length(sc.start_x, sc.start_y);

@@ -124,7 +124,7 @@ class SimOptions:
     soil_points_per_panel: int
     soil_normal_damping: float
     rigid: RigidContactParameters
-    friction: float
+    friction: float | None
     rigid_slip: float
     rigid_tyre_stiffness_x: float
     rigid_tyre_stiffness_y: float

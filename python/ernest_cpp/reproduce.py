@@ -181,7 +181,7 @@ def _paper_t6_values(row_id: str) -> str:
     return "—"
 
 
-def run_table6(ctrls: dict, seeds: list[int], episode_length: float,
+def run_table6(ctrls: dict, seeds: list[int], episode_length: float | None,
                log: Callable[[str], None]) -> dict:
     """{(soil, controller): {"tr": %, "cot": J/(kg m), "progress": m, ...}}, pooled over seeds."""
     from . import evaluate as ev
@@ -276,7 +276,7 @@ def front_wheels_back(env, duration: float = 20.0, speed: float = 0.2) -> int:
     return int(np.sum(np.asarray(sim.state.wheel_position)[:2, 0] < near))
 
 
-def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float,
+def run_obstacles(ctrls: dict, seeds: list[int], episode_length: float | None,
                   log: Callable[[str], None]) -> dict:
     from . import evaluate as ev
 
@@ -632,10 +632,11 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--sections: unknown {s!r} (allowed: {', '.join(SECTIONS)})")
     if args.seeds < 1:
         raise ValueError(f"--seeds = {args.seeds} must be >= 1")
-    if args.episode_length < 0:
-        raise ValueError("--episode-length must be >= 0 (0: the course's own)")
+    if args.episode_length is not None and not args.episode_length > 0:
+        raise ValueError(f"--episode-length = {args.episode_length} must be > 0 (leave it out for "
+                         "the course's own)")
     if args.quick:
-        args.episode_length = args.episode_length or 20.0
+        args.episode_length = args.episode_length or 20.0  # None: the quick run's 20 s
         args.points, args.max_time, args.rig_points = 1, min(args.max_time, 0.1), 19
     policy = args.policy if args.policy else None
     if policy and not os.path.exists(policy):
@@ -728,9 +729,9 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _plot_climb(ctrls: dict, seed: int, episode_length: float, out: str) -> str:
+def _plot_climb(ctrls: dict, seed: int, episode_length: float | None, out: str) -> str:
     """Figs 19–20 (``climb_plot``) for the learned policy, if any, and the scripted step climb
-    (``episode_length`` 0: the course's own)."""
+    (``episode_length`` None: the course's own)."""
     from .climb_plot import climb_trace, plot_climb
     from .envs.climbing import StepClimbController
 
@@ -763,8 +764,8 @@ def add_parser(sub) -> None:
     p.add_argument("--seeds", type=int, default=3,
                    help="episodes per course and controller (default 3; the evaluation courses "
                         "differ only in the rigid contacts' friction)")
-    p.add_argument("--episode-length", type=float, default=0.0,
-                   help="simulated seconds per episode (default 0: the course's own, 60 s)")
+    p.add_argument("--episode-length", type=float, default=None,
+                   help="simulated seconds per episode (default: the course's own, 60 s)")
     p.add_argument("--points", type=int, default=5,
                    help="gait-transition switch points per direction (paper: 5)")
     p.add_argument("--max-time", type=float, default=0.5, help="SLSQP budget per transition [s]")

@@ -318,7 +318,7 @@ TEST(Scenarios, RandomisationRangesAreOptions) {
     EXPECT_NEAR(b.centre.z() + 0.5 * b.size.z(), 0.2, 0.005 + 1e-12);
   }
   EXPECT_EQ(trap.friction, 0.6);
-  bt.obstacle_friction = 0.0;  // drawn again, as without the option (the same draws)
+  bt.obstacle_friction = std::nullopt;  // drawn again, as without the option (the same draws)
   bt.kind = ScenarioKind::RockField;
   ScenarioOptions rf;
   EXPECT_EQ(generate_scenario(bt, 4).friction, generate_scenario(rf, 4).friction);
@@ -328,19 +328,25 @@ TEST(Scenarios, RandomisationRangesAreOptions) {
   ASSERT_EQ(fixed.obstacles.size(), drawn.obstacles.size());  // fixing it moves no rock
   for (size_t i = 0; i < fixed.obstacles.size(); ++i)
     EXPECT_EQ(fixed.obstacles[i].centre, drawn.obstacles[i].centre);
-  for (auto field : {&ScenarioOptions::bickler_height, &ScenarioOptions::bickler_depth,
-                     &ScenarioOptions::obstacle_friction}) {
-    ScenarioOptions b;
-    b.*field = 3.0;  // out of range for each: the message names the field
+  const auto message = [](const ScenarioOptions& b) {
     try {
       generate_scenario(b, 0);
-      ADD_FAILURE() << "no exception";
     } catch (const std::invalid_argument& e) {
-      const std::string name = field == &ScenarioOptions::bickler_height ? "bickler_height"
-                               : field == &ScenarioOptions::bickler_depth ? "bickler_depth"
-                                                                           : "obstacle_friction";
-      EXPECT_NE(std::string(e.what()).find("ScenarioOptions." + name), std::string::npos) << e.what();
+      return std::string(e.what());
     }
+    return std::string("no exception");
+  };
+  for (auto field : {&ScenarioOptions::bickler_height, &ScenarioOptions::bickler_depth}) {
+    ScenarioOptions b;
+    b.*field = 3.0;  // out of range for each: the message names the field
+    const std::string name = field == &ScenarioOptions::bickler_height ? "bickler_height" : "bickler_depth";
+    EXPECT_NE(message(b).find("ScenarioOptions." + name), std::string::npos) << message(b);
+  }
+  // A set obstacle friction is a real one: no 0 or negative "draw it" sentinel, no NaN.
+  for (double mu : {3.0, 0.0, -1.0, std::nan("")}) {
+    ScenarioOptions b;
+    b.obstacle_friction = mu;
+    EXPECT_NE(message(b).find("ScenarioOptions.obstacle_friction"), std::string::npos) << mu;
   }
   ScenarioOptions deep;
   deep.bickler_depth = 0.86;  // as deep as the wheelbase: it could not be straddled

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "ernest/envs/rover_env.hpp"
 
@@ -156,4 +158,38 @@ TEST(RoverEnv, InvalidOptionsAndActions) {
   RoverEnv env(dynamics::RoverParameters{}, flat_rigid());
   env.reset(0);
   EXPECT_THROW(env.step(ActionVector(NAN, 0, 0)), std::invalid_argument);
+}
+
+TEST(RoverEnv, OptionalOptionsRefuseSentinelsAndNonsense) {
+  // Unset optional fields mean "the default"; a set one must be a real value, so the old
+  // "0 = default" sentinel, negatives and NaN are refused, naming the field.
+  EnvOptions{}.validate();
+  const auto refused = [](const EnvOptions& o, const std::string& field) {
+    try {
+      o.validate();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what()).find("EnvOptions." + field) != std::string::npos;
+    }
+    return false;
+  };
+  for (double v : {0.0, -1.0, std::nan("")}) {
+    EnvOptions o;
+    o.physics_dt = v;
+    EXPECT_TRUE(refused(o, "physics_dt")) << v;
+    o = EnvOptions{};
+    o.episode_duration = v;
+    EXPECT_TRUE(refused(o, "episode_duration")) << v;
+    o = EnvOptions{};
+    o.slip_force_tolerance = v;
+    EXPECT_TRUE(refused(o, "slip_force_tolerance")) << v;
+    o = EnvOptions{};
+    o.eps_slip = v;
+    EXPECT_TRUE(refused(o, "eps_slip")) << v;
+    o = EnvOptions{};
+    o.eps_motion = v;
+    EXPECT_TRUE(refused(o, "eps_motion")) << v;
+  }
+  EnvOptions o;
+  o.obstacle_substeps = 0;
+  EXPECT_TRUE(refused(o, "obstacle_substeps"));
 }

@@ -157,6 +157,35 @@ def test_observation_layout_is_published_for_training_and_export():
     assert lay.obs_dim == 45 and lay.act_dim == 3
 
 
+def test_optional_options_are_none_and_nonsense_is_refused():
+    # Unset optional parameters are None ("the default"); a set value must be a real one: the
+    # old "0 = default" sentinel, negatives and NaN are refused, naming the parameter and range.
+    from ernest_cpp import dynamics as D
+    o = E.make_options()
+    assert (o.physics_dt, o.slip_force_tolerance, o.obstacle_substeps, o.episode_duration) == \
+        (None, None, None, None)
+    assert o.scenario.obstacle_friction is None
+    assert E.make_options(eps_slip=None, eps_motion=None).eps_slip is None  # the preset's
+    for name in ("physics_dt", "episode_length", "slip_force_tolerance", "eps_slip", "eps_motion"):
+        for bad in (0, 0.0, -1.0, float("nan"), "1"):
+            with pytest.raises(ValueError, match=rf"{name} = .*\(0, "):
+                E.make_options(**{name: bad})
+    for bad in (0, -2, 65, 1.5):
+        with pytest.raises(ValueError, match=r"obstacle_substeps = .*\[1, 64\]"):
+            E.make_options(obstacle_substeps=bad)
+    assert E.make_options(episode_length=2.0, obstacle_substeps=2).episode_duration == 2.0
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="obstacle_friction"):
+            E.make_options(randomisation={"obstacle_friction": bad})
+    assert E.make_options(randomisation={"obstacle_friction": None}).scenario.obstacle_friction is None
+    sim_options = D.SimOptions()
+    assert sim_options.friction is None  # drawn from Table 3's range with the seed
+    for bad in (-1.0, float("nan"), 11.0):
+        with pytest.raises(ValueError, match="SimOptions.friction"):
+            sim_options.friction = bad
+    assert D.make_options(friction=0.8).friction == 0.8
+
+
 def test_bad_arguments_raise_value_errors():
     with pytest.raises(ValueError, match="scenario"):
         E.ErnestEnv("moon")

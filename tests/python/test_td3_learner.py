@@ -143,6 +143,22 @@ def test_the_anchor_term_follows_its_definition_and_holds_the_actor():
         with torch.no_grad():
             drift[w] = (a.actor(probe) - start(probe)).pow(2).sum(1).mean().item()
     assert drift[50.0] < 0.25 * drift[0.0], drift
+    # a batch's anchor_mask picks the rows held: none held is the plain update, all held the
+    # unmasked one
+    runs = {}
+    for name, w, mask in (("plain", 0.0, None), ("none held", 0.5, 0.0), ("all held", 0.5, 1.0),
+                          ("unmasked", 0.5, None)):
+        a = TD3(OBS, ACT, cfg, seed=4)
+        a.set_anchor(copy.deepcopy(a.actor), w)
+        for b in _batches(6, seed=5):
+            if mask is not None:
+                b = {**b, "anchor_mask": torch.full((b["obs"].shape[0],), mask)}
+            a.update(b)
+        runs[name] = a.actor.state_dict()
+    for x, y in (("plain", "none held"), ("unmasked", "all held")):
+        for k, v in runs[x].items():
+            torch.testing.assert_close(runs[y][k], v, rtol=0, atol=0)
+    assert any(not torch.equal(runs["plain"][k], v) for k, v in runs["unmasked"].items())
     for bad in (-1.0, float("nan"), float("inf")):
         with pytest.raises(ValueError, match="anchor weight"):
             agent.set_anchor(start, bad)

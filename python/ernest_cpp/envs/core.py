@@ -5,7 +5,6 @@ from __future__ import annotations
 import contextlib
 import math
 import numbers
-import pickle
 import threading
 from typing import Any
 
@@ -56,23 +55,40 @@ def _flag(name: str, value) -> bool:
     raise ValueError(f"{name} = {value!r} must be a bool (True or False)")
 
 
-def check_seed(seed, name: str, room: int = 0) -> int:
-    """seed as an int in [0, 2**64 - 1 - room] (the C++ seeds are uint64), else ValueError."""
-    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
-        raise ValueError(f"{name} = {seed!r} must be an integer in [0, {2**64 - 1 - room}]")
-    value = int(seed)
-    if not 0 <= value <= 2**64 - 1 - room:
-        raise ValueError(f"{name} = {value} is outside the allowed range [0, {2**64 - 1 - room}]")
-    return value
+_DEFAULTS = _envs.EnvOptions()  # the one set of defaults (C++ EnvOptions)
+
+
+def _optional_number(name: str, value, lo: float, hi: float, default: str, integer: bool = False):
+    """None (the default) or a number in (lo, hi] ([lo, hi] for integers), else ValueError naming
+    the parameter: no 0 or negative stands for "default"."""
+    if value is None:
+        return None
+    bad = isinstance(value, bool) or not isinstance(value, numbers.Integral if integer else numbers.Real)
+    if not bad:
+        v = int(value) if integer else float(value)
+        if (lo <= v <= hi) if integer else (lo < v <= hi):  # NaN fails both
+            return v
+    span = f"[{lo}, {hi}]" if integer else f"({lo:g}, {hi:g}]"
+    raise ValueError(f"{name} = {value!r} must be {'an integer' if integer else 'a number'} in "
+                     f"{span}, or None for {default}")
 
 
 def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool = False,
-                 physics_dt: float = 0.0, slip_force_tolerance: float = 0.0, obstacle_substeps: int = 0, episode_length: float = 0.0, rigid_ground: bool = False,
-                 eps_slip: float = 1e4, eps_motion: float = 0.01, fts_noise_force: float = 0.0, fts_noise_torque: float = 0.0,
+                 physics_dt: float | None = None, slip_force_tolerance: float | None = None,
+                 obstacle_substeps: int | None = None, episode_length: float | None = None,
+                 rigid_ground: bool = False, eps_slip: float | None = _DEFAULTS.eps_slip,
+                 eps_motion: float | None = _DEFAULTS.eps_motion,
+                 fts_noise_force: float = 0.0, fts_noise_torque: float = 0.0,
                  start_speed: float = 0.0, randomisation: dict | None = None,
                  terrain_source: str = "truth", stereo=None,
                  reward: dict | None = None) -> _envs.EnvOptions:
     """EnvOptions from keyword arguments (the Gymnasium kwargs), validated.
+
+    ``physics_dt`` [s], ``slip_force_tolerance``, ``obstacle_substeps`` and ``episode_length`` [s]
+    default to None: the simulator's step and settings, the scenario's episode length (30 s for
+    the step, 60 s otherwise). ``eps_slip`` and ``eps_motion`` default to the environments' values
+    (``EnvOptions``; docs/soil.md), None keeps the soil preset's (Table 2). A value given must be
+    a real one: 0, negatives and NaN are refused (ValueError naming the parameter and range).
 
     ``randomisation`` sets ScenarioOptions fields: ``range_scale`` (0..1, multiplies Table 3's
     maximum bounds: tilt, yaw/lateral/heading offsets, orientations), ``step_height_range``,
@@ -87,10 +103,8 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
     ``reward`` sets eq 38's weights (``sensing.RewardWeights``): ``w_s``, ``w_delta``, ``w_tau``
     (defaults 2, 0.1, 1e-4: the paper's; it calls them tunable).
     """
-    check_scenario(scenario)
-    for name, value in (("soil", soil), ("terrain_source", terrain_source)):
-        if not isinstance(value, str):
-            raise TypeError(f"{name} = {value!r} must be a str")
+    if scenario not in SCENARIO_ALIASES:
+        raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(sorted(SCENARIO_ALIASES))}")
     o = _envs.EnvOptions()
     sc = _envs.ScenarioOptions()
     sc.kind = SCENARIO_ALIASES[scenario]
@@ -98,17 +112,20 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
         if key == "kind" or not hasattr(sc, key):
             raise ValueError(f"randomisation has no field {key!r}")
         setattr(sc, key, tuple(float(v) for v in value) if isinstance(value, (list, tuple))
-                else float(value))
+                else None if value is None else float(value))
     o.scenario = sc
     o.soil = soil
     o.passive = _flag("passive", passive)
-    o.physics_dt = float(physics_dt)
-    o.slip_force_tolerance = float(slip_force_tolerance)
-    o.obstacle_substeps = int(obstacle_substeps)
-    o.episode_duration = float(episode_length)
+    o.physics_dt = _optional_number("physics_dt", physics_dt, 0.0, 0.05, "the simulator's step")
+    o.slip_force_tolerance = _optional_number("slip_force_tolerance", slip_force_tolerance, 0.0,
+                                              1e9, "the simulator's")
+    o.obstacle_substeps = _optional_number("obstacle_substeps", obstacle_substeps, 1, 64,
+                                           "the simulator's", integer=True)
+    o.episode_duration = _optional_number("episode_length", episode_length, 0.0, 3600.0,
+                                          "the scenario's")
     o.rigid_ground = _flag("rigid_ground", rigid_ground)
-    o.eps_slip = float(eps_slip)
-    o.eps_motion = float(eps_motion)
+    o.eps_slip = _optional_number("eps_slip", eps_slip, 0.0, 1e8, "the soil preset's")
+    o.eps_motion = _optional_number("eps_motion", eps_motion, 0.0, 1.0, "the soil preset's")
     o.fts_noise_force = float(fts_noise_force)
     o.fts_noise_torque = float(fts_noise_torque)
     o.start_speed = float(start_speed)
@@ -121,11 +138,6 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
         setattr(o.weights, key, float(value))
     o.validate()
     return o
-
-
-def check_scenario(scenario) -> None:
-    if not isinstance(scenario, str) or scenario not in SCENARIO_ALIASES:
-        raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(sorted(SCENARIO_ALIASES))}")
 
 
 def observation_layout(options: _envs.EnvOptions):
@@ -165,9 +177,6 @@ class ErnestEnv(gym.Env):
 
     Copies (``pickle``, ``copy.deepcopy``) carry the configuration (options, rover parameters,
     render mode), not the C++ episode in progress: a copy starts unreset, call ``reset()``.
-
-    ``params`` and ``options`` may be changed in place after creation: the change is validated
-    and applied at the next ``reset()`` (the episode in progress keeps its configuration).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
@@ -176,7 +185,6 @@ class ErnestEnv(gym.Env):
                  params: Any = None, _options: Any = None, **kwargs):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode = {render_mode!r}; allowed: None, 'rgb_array'")
-        check_scenario(scenario)
         self.render_mode = render_mode
         self.scenario_name = scenario
         if _options is not None:  # an unpickled copy: the original's validated options
@@ -186,7 +194,6 @@ class ErnestEnv(gym.Env):
             self.options = make_options(scenario, **kwargs)
         self.params = params if params is not None else _dyn.RoverParameters()
         self.core = _envs.RoverEnv(self.params, self.options)
-        self._built_from = self._configuration()
         clip = sensing.OBSERVATION_CLIP
         self.observation_space = gym.spaces.Box(-clip, clip, (sensing.OBSERVATION_SIZE,), np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (sensing.ACTION_SIZE,), np.float32)
@@ -200,25 +207,7 @@ class ErnestEnv(gym.Env):
         with _one_thread(self._busy, "ErnestEnv.reset"):
             return self._reset(seed)
 
-    def _configuration(self) -> bytes:
-        return pickle.dumps((self.params, self.options))
-
-    def _apply_changes(self) -> None:
-        """Rebuild the C++ core if params or options were changed since it was built."""
-        now = self._configuration()
-        if now == self._built_from:
-            return
-        self.options.validate()
-        self.params.validate()
-        self.core = _envs.RoverEnv(self.params, self.options)
-        self.observation_layout = observation_layout(self.options)
-        self._built_from = now
-        self._started = False
-
     def _reset(self, seed):
-        if seed is not None:
-            seed = check_seed(seed, "seed")
-        self._apply_changes()
         super().reset(seed=seed)
         if seed is not None:
             obs = self.core.reset(int(seed))
@@ -246,7 +235,7 @@ class ErnestEnv(gym.Env):
     def _step(self, action):
         if not self._started:
             raise RuntimeError("ErnestEnv.step: call reset() first")
-        a = as_actions(action, "action").reshape(-1)
+        a = np.asarray(action, dtype=np.float64).reshape(-1)
         if a.shape != (sensing.ACTION_SIZE,):
             raise ValueError(f"action must have 3 values, got shape {np.shape(action)}")
         if not np.all(np.isfinite(a)):
@@ -286,14 +275,6 @@ class ErnestEnv(gym.Env):
         s = self.core.state
         p = self.core.scenario.path
         return p.heading_deviation(s.yaw), p.lateral_deviation(s.position[0], s.position[1])
-
-
-def as_actions(action, name: str) -> np.ndarray:
-    """action as a float64 array, else ValueError naming it (e.g. a string)."""
-    try:
-        return np.asarray(action, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers in [-1, 1], got {action!r}") from None
 
 
 def deg(x: float) -> float:

@@ -26,7 +26,7 @@ class ScenarioOptions:
     kind: str
     max_rock_density: float
     noise_unit: float
-    obstacle_friction: float
+    obstacle_friction: float | None
     p_instance: float
     range_scale: float
     ripple_amplitude_range: list[float]
@@ -108,16 +108,16 @@ class EnvOptions:
     scales: ObservationScales
     scenario: ScenarioOptions
     weights: RewardWeights
-    episode_duration: float
-    eps_motion: float
-    eps_slip: float
+    episode_duration: float | None
+    eps_motion: float | None
+    eps_slip: float | None
     fts_noise_force: float
     fts_noise_torque: float
-    obstacle_substeps: int
+    obstacle_substeps: int | None
     passive: bool
-    physics_dt: float
+    physics_dt: float | None
     policy_dt: float
-    slip_force_tolerance: float
+    slip_force_tolerance: float | None
     soil: str
     start_speed: float
     stereo: StereoMapperOptions
@@ -174,18 +174,16 @@ def generate_scenario(options: ScenarioOptions, seed: int) -> Scenario: ...
 def ripple_height(x: float, amplitude: float, wavelength: float, alpha: float) -> float: ...
 def scenario_names() -> list[str]: ...
 def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool = False,
-                 physics_dt: float = ..., slip_force_tolerance: float = ...,
-                 obstacle_substeps: int = ..., episode_length: float = ...,
-                 rigid_ground: bool = False, eps_slip: float = ..., eps_motion: float = ...,
+                 physics_dt: float | None = None, slip_force_tolerance: float | None = None,
+                 obstacle_substeps: int | None = None, episode_length: float | None = None,
+                 rigid_ground: bool = False, eps_slip: float | None = ...,
+                 eps_motion: float | None = ...,
                  fts_noise_force: float = 0.0, fts_noise_torque: float = 0.0,
                  start_speed: float = 0.0, randomisation: dict[str, Any] | None = None,
                  terrain_source: str = "truth", stereo: StereoMapperOptions | None = None,
                  reward: dict[str, float] | None = None) -> EnvOptions: ...
 def observation_layout(options: EnvOptions) -> ObservationLayout: ...
 def check_reset_options(options: dict[str, Any] | None) -> None: ...
-def check_seed(seed: Any, name: str, room: int = 0) -> int: ...
-def check_scenario(scenario: Any) -> None: ...
-def as_actions(action: Any, name: str) -> npt.NDArray[np.float64]: ...
 def deg(x: float) -> float: ...
 
 class ErnestEnv(gym.Env[npt.NDArray[np.float32], npt.NDArray[np.float32]]):

@@ -148,8 +148,9 @@ class TD3:
         ``weight · mean|Q1| · mean‖π(s) − π_anchor(s)‖²`` (the behaviour-cloning term of TD3+BC,
         scaled by the Q magnitude as there, towards a policy instead of the buffer's actions).
         Used when continuing a consolidated agent, so that what the pool teaches anew (e.g. a
-        stronger lateral term) does not wash out skills the pool holds little of. ``None`` or a
-        weight of 0 removes it."""
+        stronger lateral term) does not wash out skills the pool holds little of. A batch's
+        optional ``anchor_mask`` (one 0/1 per row) limits the term to the rows it marks. ``None``
+        or a weight of 0 removes it."""
         if actor is None or weight == 0.0:
             self.anchor = None
             return
@@ -199,7 +200,10 @@ class TD3:
                 ref, w = self.anchor
                 with torch.no_grad():
                     ref_act, scale = ref(obs), q.abs().mean()
-                actor_loss = actor_loss + w * scale * (pi - ref_act).pow(2).sum(-1).mean()
+                dev2 = (pi - ref_act).pow(2).sum(-1)
+                if "anchor_mask" in batch:  # only the rows whose behaviour is to be held
+                    dev2 = dev2 * _as_tensor(batch["anchor_mask"]).to(dev)
+                actor_loss = actor_loss + w * scale * dev2.mean()
             self.actor_opt.zero_grad(set_to_none=True)
             actor_loss.backward()
             for p in q1_params:
