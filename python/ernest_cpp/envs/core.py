@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import math
 import numbers
+import pickle
 import threading
 from typing import Any
 
@@ -55,6 +56,16 @@ def _flag(name: str, value) -> bool:
     raise ValueError(f"{name} = {value!r} must be a bool (True or False)")
 
 
+def check_seed(seed, name: str, room: int = 0) -> int:
+    """seed as an int in [0, 2**64 - 1 - room] (the C++ seeds are uint64), else ValueError."""
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise ValueError(f"{name} = {seed!r} must be an integer in [0, {2**64 - 1 - room}]")
+    value = int(seed)
+    if not 0 <= value <= 2**64 - 1 - room:
+        raise ValueError(f"{name} = {value} is outside the allowed range [0, {2**64 - 1 - room}]")
+    return value
+
+
 _DEFAULTS = _envs.EnvOptions()  # the one set of defaults (C++ EnvOptions)
 
 
@@ -103,8 +114,10 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
     ``reward`` sets eq 38's weights (``sensing.RewardWeights``): ``w_s``, ``w_delta``, ``w_tau``
     (defaults 2, 0.1, 1e-4: the paper's; it calls them tunable).
     """
-    if scenario not in SCENARIO_ALIASES:
-        raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(sorted(SCENARIO_ALIASES))}")
+    check_scenario(scenario)
+    for name, value in (("soil", soil), ("terrain_source", terrain_source)):
+        if not isinstance(value, str):
+            raise TypeError(f"{name} = {value!r} must be a str")
     o = _envs.EnvOptions()
     sc = _envs.ScenarioOptions()
     sc.kind = SCENARIO_ALIASES[scenario]
@@ -138,6 +151,11 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
         setattr(o.weights, key, float(value))
     o.validate()
     return o
+
+
+def check_scenario(scenario) -> None:
+    if not isinstance(scenario, str) or scenario not in SCENARIO_ALIASES:
+        raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(sorted(SCENARIO_ALIASES))}")
 
 
 def observation_layout(options: _envs.EnvOptions):
@@ -177,6 +195,9 @@ class ErnestEnv(gym.Env):
 
     Copies (``pickle``, ``copy.deepcopy``) carry the configuration (options, rover parameters,
     render mode), not the C++ episode in progress: a copy starts unreset, call ``reset()``.
+
+    ``params`` and ``options`` may be changed in place after creation: the change is validated
+    and applied at the next ``reset()`` (the episode in progress keeps its configuration).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
@@ -185,6 +206,7 @@ class ErnestEnv(gym.Env):
                  params: Any = None, _options: Any = None, **kwargs):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode = {render_mode!r}; allowed: None, 'rgb_array'")
+        check_scenario(scenario)
         self.render_mode = render_mode
         self.scenario_name = scenario
         if _options is not None:  # an unpickled copy: the original's validated options
@@ -194,6 +216,7 @@ class ErnestEnv(gym.Env):
             self.options = make_options(scenario, **kwargs)
         self.params = params if params is not None else _dyn.RoverParameters()
         self.core = _envs.RoverEnv(self.params, self.options)
+        self._built_from = self._configuration()
         clip = sensing.OBSERVATION_CLIP
         self.observation_space = gym.spaces.Box(-clip, clip, (sensing.OBSERVATION_SIZE,), np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (sensing.ACTION_SIZE,), np.float32)
@@ -207,7 +230,25 @@ class ErnestEnv(gym.Env):
         with _one_thread(self._busy, "ErnestEnv.reset"):
             return self._reset(seed)
 
+    def _configuration(self) -> bytes:
+        return pickle.dumps((self.params, self.options))
+
+    def _apply_changes(self) -> None:
+        """Rebuild the C++ core if params or options were changed since it was built."""
+        now = self._configuration()
+        if now == self._built_from:
+            return
+        self.options.validate()
+        self.params.validate()
+        self.core = _envs.RoverEnv(self.params, self.options)
+        self.observation_layout = observation_layout(self.options)
+        self._built_from = now
+        self._started = False
+
     def _reset(self, seed):
+        if seed is not None:
+            seed = check_seed(seed, "seed")
+        self._apply_changes()
         super().reset(seed=seed)
         if seed is not None:
             obs = self.core.reset(int(seed))
@@ -235,7 +276,7 @@ class ErnestEnv(gym.Env):
     def _step(self, action):
         if not self._started:
             raise RuntimeError("ErnestEnv.step: call reset() first")
-        a = np.asarray(action, dtype=np.float64).reshape(-1)
+        a = as_actions(action, "action").reshape(-1)
         if a.shape != (sensing.ACTION_SIZE,):
             raise ValueError(f"action must have 3 values, got shape {np.shape(action)}")
         if not np.all(np.isfinite(a)):
@@ -275,6 +316,14 @@ class ErnestEnv(gym.Env):
         s = self.core.state
         p = self.core.scenario.path
         return p.heading_deviation(s.yaw), p.lateral_deviation(s.position[0], s.position[1])
+
+
+def as_actions(action, name: str) -> np.ndarray:
+    """action as a float64 array, else ValueError naming it (e.g. a string)."""
+    try:
+        return np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers in [-1, 1], got {action!r}") from None
 
 
 def deg(x: float) -> float:
