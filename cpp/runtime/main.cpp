@@ -364,7 +364,7 @@ int main(int argc, char** argv) {
                                  " lines, expected rows of " +
                                  std::to_string(sensing::kObservationSize) + " values)");
       OutputFile out(actions_path);
-      out.printf("step,a_vx,a_yaw,a_roll\n");
+      out.printf("step [-],a_vx [-],a_yaw [-],a_roll [-]\n");
       long step = 0;
       for (const sensing::ObservationVector& obs : rows) {
         const sensing::ActionVector act = policy.action(obs);
@@ -407,7 +407,7 @@ int main(int argc, char** argv) {
                       : runtime::run_onboard_episode(env, policy, static_cast<std::uint64_t>(seed), nullptr,
                                                      telemetry.get(), progress);
     if (actions_out) {
-      actions_out->printf("step,a_vx,a_yaw,a_roll\n");
+      actions_out->printf("step [-],a_vx [-],a_yaw [-],a_roll [-]\n");
       for (size_t k = 0; k < rep.actions.size(); ++k)
         actions_out->printf("%zu,%.17g,%.17g,%.17g\n", k, rep.actions[k][0], rep.actions[k][1],
                             rep.actions[k][2]);
@@ -418,8 +418,8 @@ int main(int argc, char** argv) {
     std::printf("scenario %s seed %lld mode %s: %s after %.1f s (%zu policy steps)\n", scenario.c_str(), seed,
                 mode.c_str(), rep.end.c_str(), rep.metrics.time, rep.actions.size());
     std::printf("progress along the path  %.3f m\n", rep.metrics.progress);
-    std::printf("travel reduction         %.3f\n", rep.travel_reduction);
-    std::printf("cost of transport        %.3f\n", rep.cost_of_transport);
+    std::printf("travel reduction         %.3f (fraction: 1 - progress / no-slip travel)\n", rep.travel_reduction);
+    std::printf("cost of transport        %.3f (dimensionless: energy / (m g progress))\n", rep.cost_of_transport);
     std::printf("energy                   %.1f J\n", rep.metrics.energy);
     std::printf("inference latency        median %.1f us, p99 %.1f us (%lld calls)\n", lat.median_us, lat.p99_us,
                 static_cast<long long>(lat.count));

@@ -7,9 +7,11 @@
 namespace ernest::runtime {
 
 const char* Telemetry::header() {
-  return "time,x,y,z,roll,pitch,yaw,gimbal_yaw,gimbal_roll,"
-         "load_fl,load_fr,load_rl,load_rr,action_vx,action_yaw,action_roll,"
-         "cmd_vx,cmd_yaw_rate,cmd_roll_rate,power,energy,fault";
+  // Each column names its unit; the actions are the policy's normalised outputs in [-1, 1].
+  return "time [s],x [m],y [m],z [m],roll [rad],pitch [rad],yaw [rad],gimbal_yaw [rad],"
+         "gimbal_roll [rad],load_fl [N],load_fr [N],load_rl [N],load_rr [N],action_vx [-],"
+         "action_yaw [-],action_roll [-],cmd_vx [m/s],cmd_yaw_rate [rad/s],cmd_roll_rate [rad/s],"
+         "power [W],energy [J],fault [-]";
 }
 
 Telemetry::Telemetry(const std::string& path) : path_(path) {

@@ -16,9 +16,10 @@ import numpy as np
 
 from . import _args
 from . import envs as E
+from .scenarios import SCENARIOS, scenario_name
 from .envs.baselines import CrawlingGaitController, PassiveController
 
-COURSES = [  # (label, env id, kwargs)
+COURSES = [  # (label, env id, kwargs); --scenario picks them by the env's short name
     ("Bickler trap (dry sand)", "ernest/BicklerTrap-v0", {"soil": "dry_sand"}),
     ("20 deg slope, dry M90", "ernest/SlopeEval-v0", {"soil": "m90"}),
     ("20 deg slope, wet sand", "ernest/SlopeEval-v0", {"soil": "wet_sand"}),
@@ -119,6 +120,22 @@ def max_lateral(env, history) -> float:
                      for h in history))
 
 
+def courses(scenarios=None) -> list[tuple[str, str, dict]]:
+    """The (label, env id, kwargs) rows to run: all of ``COURSES`` without ``scenarios``, else
+    those of the given short names (``scenarios.SCENARIOS``) in that order; a scenario that is not
+    one of the courses runs on its own env's defaults."""
+    if not scenarios:
+        return list(COURSES)
+    out = []
+    for name in scenarios:
+        env_id = SCENARIOS.get(name)
+        if env_id is None:
+            raise ValueError(f"scenario {name!r}: choose one of {', '.join(SCENARIOS)}")
+        rows = [c for c in COURSES if c[1] == env_id] or [(f"{name} ({env_id})", env_id, {})]
+        out += [c for c in rows if c not in out]
+    return out
+
+
 def _plots(results, out_dir: str) -> list[str]:
     import matplotlib
 
@@ -126,9 +143,11 @@ def _plots(results, out_dir: str) -> list[str]:
     import matplotlib.pyplot as plt
 
     paths = []
+    labels = list(results)  # the courses run, in order
     # 1. paths over each course
-    fig, axes = plt.subplots(len(COURSES), 1, figsize=(9, 2.3 * len(COURSES)))
-    for ax, (label, _, _) in zip(axes, COURSES):
+    fig, axes = plt.subplots(len(labels), 1, figsize=(9, 2.3 * len(labels)), squeeze=False)
+    axes = axes[:, 0]
+    for ax, label in zip(axes, labels):
         for name, r in results[label].items():
             xy = np.array([h["position"][:2] for h in r["history"]])
             ax.plot(xy[:, 0], xy[:, 1], label=f"{name}: {r['metrics']['progress']:.2f} m")
@@ -147,8 +166,30 @@ def _plots(results, out_dir: str) -> list[str]:
     paths.append(_save(fig, out_dir, "paths.png"))
     # 2. gait on the dry slope, like seed 004 Fig. 24: joints, roll torque, wheel loads
     label = "20 deg slope, dry M90"
-    fig, axes = plt.subplots(3, len(results[label]), figsize=(11, 7), sharex=True, squeeze=False)
-    for col, (name, r) in enumerate(results[label].items()):
+    if label in results:
+        paths.append(_slope_gait(results[label], out_dir, plt))
+    # 3. bar chart of travel reduction and cost of transport
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 3.6))
+    names = list(next(iter(results.values())).keys())
+    x = np.arange(len(labels))
+    for k, name in enumerate(names):
+        tr = [100 * results[c][name]["metrics"]["travel_reduction"] for c in labels]
+        cot = [min(results[c][name]["metrics"]["cost_of_transport"], 50) for c in labels]
+        a1.bar(x + 0.8 * k / len(names), tr, 0.8 / len(names), label=name)
+        a2.bar(x + 0.8 * k / len(names), cot, 0.8 / len(names), label=name)
+    for a, yl in ((a1, "travel reduction [%]"), (a2, "cost of transport [-] (capped at 50)")):
+        a.set_xticks(x + 0.4 - 0.4 / len(names))
+        a.set_xticklabels([c.split(" (")[0] for c in labels], rotation=20, fontsize=7)
+        a.set_ylabel(yl)
+        a.legend(fontsize=7)
+    fig.tight_layout()
+    paths.append(_save(fig, out_dir, "metrics.png"))
+    return paths
+
+
+def _slope_gait(runs: dict, out_dir: str, plt) -> str:
+    fig, axes = plt.subplots(3, len(runs), figsize=(11, 7), sharex=True, squeeze=False)
+    for col, (name, r) in enumerate(runs.items()):
         h = r["history"]
         t = np.array([x["time"] for x in h])
         axes[0, col].plot(t, np.degrees([x["gimbal_yaw"] for x in h]), label="yaw")
@@ -166,24 +207,7 @@ def _plots(results, out_dir: str) -> list[str]:
         axes[2, col].legend(fontsize=7, ncol=4)
     fig.suptitle("Gait on a 20 deg M90 slope (compare seed 004 Figs 23-24)", fontsize=10)
     fig.tight_layout()
-    paths.append(_save(fig, out_dir, "slope_gait.png"))
-    # 3. bar chart of travel reduction and cost of transport
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 3.6))
-    names = list(next(iter(results.values())).keys())
-    x = np.arange(len(COURSES))
-    for k, name in enumerate(names):
-        tr = [100 * results[c[0]][name]["metrics"]["travel_reduction"] for c in COURSES]
-        cot = [min(results[c[0]][name]["metrics"]["cost_of_transport"], 50) for c in COURSES]
-        a1.bar(x + 0.8 * k / len(names), tr, 0.8 / len(names), label=name)
-        a2.bar(x + 0.8 * k / len(names), cot, 0.8 / len(names), label=name)
-    for a, yl in ((a1, "travel reduction [%]"), (a2, "cost of transport [-] (capped at 50)")):
-        a.set_xticks(x + 0.4 - 0.4 / len(names))
-        a.set_xticklabels([c[0].split(" (")[0] for c in COURSES], rotation=20, fontsize=7)
-        a.set_ylabel(yl)
-        a.legend(fontsize=7)
-    fig.tight_layout()
-    paths.append(_save(fig, out_dir, "metrics.png"))
-    return paths
+    return _save(fig, out_dir, "slope_gait.png")
 
 
 def _save(fig, out_dir, name):
@@ -211,8 +235,9 @@ def course_episode(env_id: str, kwargs: dict, name: str, policy_file: str | None
 def run(args: argparse.Namespace) -> int:
     os.makedirs(args.out, exist_ok=True)
     ctrls = controllers(args.policy)
+    runs = courses(getattr(args, "scenario", None))
     results: dict[str, dict] = {}
-    total = len(COURSES) * len(ctrls)
+    total = len(runs) * len(ctrls)
     k = 0
     t_start = time.perf_counter()
     remote = None
@@ -220,12 +245,12 @@ def run(args: argparse.Namespace) -> int:
         from .rl.ray_backend import fan_out
 
         policy_file = os.path.abspath(args.policy) if args.policy else None  # read on the nodes
-        keys = [(c, name) for c in range(len(COURSES)) for name in ctrls]
-        jobs = [(COURSES[c][1], COURSES[c][2], name, policy_file, args.seed) for c, name in keys]
+        keys = [(c, name) for c in range(len(runs)) for name in ctrls]
+        jobs = [(runs[c][1], runs[c][2], name, policy_file, args.seed) for c, name in keys]
         remote = dict(zip(keys, fan_out(course_episode, jobs, args.ray_address)))
     elif getattr(args, "ray_address", None):
         raise ValueError("--ray-address needs --backend ray")
-    for c, (label, env_id, kwargs) in enumerate(COURSES):
+    for c, (label, env_id, kwargs) in enumerate(runs):
         results[label] = {}
         for name, (policy, passive) in ctrls.items():
             k += 1
@@ -244,13 +269,13 @@ def run(args: argparse.Namespace) -> int:
     lines = ["# ERNEST evaluation report", "",
              f"Seed {args.seed}. Travel reduction = 1 - progress / no-slip travel (seed 004 Table 6); "
              "cost of transport = electrical energy of all six actuators (eq 40) / (m g progress).", "",
-             "| course | controller | progress [m] | travel reduction [%] | cost of transport [-] | "
-             "energy [kJ] | time [s] |", "|---|---|---|---|---|---|---|"]
-    for label, _, _ in COURSES:
+             "| course | scenario | controller | progress [m] | travel reduction [%] | "
+             "cost of transport [-] | energy [kJ] | time [s] |", "|---|---|---|---|---|---|---|---|"]
+    for label, env_id, _ in runs:
         for name, r in results[label].items():
             m = r["metrics"]
             cot = m["cost_of_transport"]
-            lines.append(f"| {label} | {name} | {m['progress']:.2f} | {100 * m['travel_reduction']:.1f} | "
+            lines.append(f"| {label} | {scenario_name(env_id)} | {name} | {m['progress']:.2f} | {100 * m['travel_reduction']:.1f} | "
                          f"{'inf' if not math.isfinite(cot) else f'{cot:.3f}'} | {m['energy'] / 1e3:.2f} | "
                          f"{m['time']:.0f} |")
     pngs = _plots(results, args.out)
@@ -281,6 +306,9 @@ def add_parser(sub) -> None:
     p.add_argument("--out", default="out/report", help="output folder (default: out/report)")
     p.add_argument("--seed", type=_args.seed, default=0)
     p.add_argument("--policy", default=None, help="exported TorchScript policy to evaluate too")
+    p.add_argument("--scenario", action="append", choices=tuple(SCENARIOS),
+                   help="run only this scenario's courses (its short name, docs/envs.md; "
+                   "repeatable; default: all evaluation courses)")
     p.add_argument("--no-video", action="store_true", help="skip the animation")
     from .rl.commands import backend_args
 

@@ -209,12 +209,12 @@ def test_evaluate_command_writes_a_report(tmp_path, capsys):
     out = tmp_path / "report"
     assert cli_main(["evaluate", "--out", str(out), "--no-video"]) == 0
     text = (out / "report.md").read_text()
-    assert "| 20 deg slope, dry M90 | passive bogie |" in text
+    assert "| 20 deg slope, dry M90 | slope_eval | passive bogie |" in text
     for name in ("paths.png", "slope_gait.png", "metrics.png"):
         assert (out / name).stat().st_size > 1000
     assert "[10/10]" in capsys.readouterr().out
     for name in ("passive bogie", "crawling gait"):
-        assert f"| 20 deg slope, dry M90 | {name} |" in text
+        assert f"| 20 deg slope, dry M90 | slope_eval | {name} |" in text
 
 
 def test_evaluate_compares_passive_crawling_and_learned(tmp_path):

@@ -68,6 +68,14 @@ def one_thread():
     torch.set_num_threads(old)
 
 
+def read_csv(path) -> dict[str, np.ndarray]:
+    """The runtime's CSV as {header: column}; each header names its unit, e.g. 'time [s]'."""
+    with open(path) as fh:
+        header = fh.readline().rstrip("\n").split(",")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return {name: data[:, k] for k, name in enumerate(header)}
+
+
 def python_episode(policy, scenario: str, seed: int, duration: float, terrain_source="truth"):
     """The Python path: ErnestEnv, physical observation -> policy (torch, float32) -> physical
     command -> sensing.command_to_action -> env.step, until the episode ends. Returns the actions,
@@ -121,9 +129,9 @@ def test_parity_python_actor_vs_cpp_runtime_whole_episode(exported, tmp_path, on
     assert printed("travel reduction") == pytest.approx(metrics["travel_reduction"], abs=2e-3)
     assert printed("cost of transport") == pytest.approx(metrics["cost_of_transport"], rel=2e-3)
     # Telemetry: one row per policy step with the actions sent.
-    rows = np.genfromtxt(tel, delimiter=",", names=True)
-    assert len(rows) == len(py)
-    np.testing.assert_allclose(rows["action_vx"], cpp[:, 0], atol=1e-12)
+    rows = read_csv(tel)
+    assert len(rows["action_vx [-]"]) == len(py)
+    np.testing.assert_allclose(rows["action_vx [-]"], cpp[:, 0], atol=1e-12)
 
 
 def test_parity_with_stereo_elevation_map(exported, tmp_path, one_thread):
@@ -176,9 +184,9 @@ def test_onboard_mode_runs_the_400hz_loop(exported, tmp_path):
     _, _, path = exported
     cpp, stdout, tel = cpp_episode(path, "flat", 1, 3.0, tmp_path, mode="onboard")
     assert len(cpp) == 6 and "watchdog trips           0" in stdout
-    rows = np.genfromtxt(tel, delimiter=",", names=True)
-    assert len(rows) == 150  # 50 Hz telemetry for 3 s
-    assert np.all(np.diff(rows["time"]) > 0) and np.all(np.isfinite(rows["power"]))
+    rows = read_csv(tel)
+    assert len(rows["time [s]"]) == 150  # 50 Hz telemetry for 3 s
+    assert np.all(np.diff(rows["time [s]"]) > 0) and np.all(np.isfinite(rows["power [W]"]))
 
 
 def test_runtime_rejects_wrong_files_clearly(exported, tmp_path):

@@ -1,6 +1,7 @@
 """Gymnasium environments of seed 004 §4.5 (training scenarios) and §5 (evaluation courses).
 
-Registered ids (kwargs of ``gymnasium.make`` go to :class:`ErnestEnv`)::
+Registered ids (kwargs of ``gymnasium.make`` go to :class:`ErnestEnv`); each scenario's short name
+(``SCENARIOS``, what every command line takes) maps to one::
 
     ernest/RockField-v0  ernest/Step-v0  ernest/Ripples-v0  ernest/Slope-v0
     ernest/BicklerTrap-v0  ernest/SlopeEval-v0  ernest/WheelStep-v0  ernest/Course-v0
@@ -16,20 +17,13 @@ From code that has not imported this package: ``gym.make("ernest_cpp.envs:ernest
 
 import gymnasium as gym
 
+from ..scenarios import SCENARIOS, scenario_env_id, scenario_name  # noqa: F401
+
 from .core import ErnestEnv, make_options  # noqa: F401
 from .vector import ErnestVectorEnv, make_vec  # noqa: F401
 
-ENV_IDS = {
-    "ernest/RockField-v0": "rockfield",
-    "ernest/Step-v0": "step",
-    "ernest/Ripples-v0": "ripples",
-    "ernest/Slope-v0": "slope",
-    "ernest/BicklerTrap-v0": "bickler",
-    "ernest/SlopeEval-v0": "slope_eval",
-    "ernest/WheelStep-v0": "wheel_step",
-    "ernest/Course-v0": "course",
-    "ernest/Flat-v0": "flat",
-}
+#: Gymnasium id -> the scenario's short name (``ernest_cpp.scenarios.SCENARIOS`` inverted).
+ENV_IDS = {env_id: name for name, env_id in SCENARIOS.items()}
 
 
 #: Keyword defaults of an id beyond its scenario (``gym.make`` and ``make_vec`` kwargs override

@@ -11,6 +11,7 @@ import os
 import re
 
 from .. import _args
+from ..scenarios import SCENARIOS
 
 
 def _passive_openmp() -> None:
@@ -208,8 +209,9 @@ def add_parser(subparsers) -> None:
                               description="Train a TD3 specialist on a Gymnasium environment.")
     p.add_argument("--env", help="any registered Gymnasium id with Box spaces, e.g. "
                    "ernest-toy/PointMass-v0")
-    p.add_argument("--scenario", choices=("rockfield", "step", "ripples", "slope"),
-                   help="ERNEST training scenario (env id ernest/<Scenario>-v0)")
+    p.add_argument("--scenario", choices=tuple(SCENARIOS),
+                   help="ERNEST scenario by its short name (docs/envs.md: rockfield, step, "
+                   "ripples and slope are seed 004's training scenarios)")
     _settings_args(p)
     p.add_argument("--run-dir", help="output folder (default runs/<env>-seed<seed>)")
     p.add_argument("--resume", action="store_true", help="continue the run in --run-dir exactly, "

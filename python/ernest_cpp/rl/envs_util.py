@@ -13,14 +13,10 @@ import numpy as np
 from . import layout as L
 
 
-SCENARIOS = {"rockfield": "RockField", "step": "Step", "ripples": "Ripples", "slope": "Slope"}
+from ..scenarios import SCENARIOS, scenario_env_id  # noqa: F401  (one table of names)
 
 
 # ---------------------------------------------------------------------------- environments
-def scenario_env_id(scenario: str) -> str:
-    if scenario not in SCENARIOS:
-        raise ValueError(f"scenario {scenario!r}: choose one of {', '.join(SCENARIOS)}")
-    return f"ernest/{SCENARIOS[scenario]}-v0"
 
 
 def resolve_env_id(env_cfg: dict) -> str:
