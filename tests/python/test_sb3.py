@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 import numpy as np
+import pytest
 import torch
 from stable_baselines3 import TD3
 from stable_baselines3.common.vec_env import DummyVecEnv
@@ -70,3 +71,69 @@ def _train_td3():
     action, _ = model.predict(env.reset(), deterministic=True)
     assert action.shape == (4, 3) and np.all(np.abs(action) <= 1)
     env.close()
+
+
+def _runtime_exe() -> str:
+    import glob
+    import os
+
+    exe = os.environ.get("ERNEST_RUNTIME_EXE", "")
+    if exe and os.access(exe, os.X_OK):
+        return exe
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    found = sorted(glob.glob(os.path.join(root, "build*", "cpp", "cpp", "runtime", "ernest_runtime")),
+                   key=os.path.getmtime)
+    assert found, "ernest_runtime not built: set ERNEST_RUNTIME_EXE"
+    return found[-1]
+
+
+def test_sb3_td3_model_exports_and_runs_in_evaluate_and_the_runtime(tmp_path):
+    # `ernest export MODEL.zip`: SB3's actor (any widths) with the envs' scaling; `ernest
+    # evaluate`'s policy path and the C++ runtime then give SB3's own actions.
+    import subprocess
+
+    from ernest_cpp import cli
+    from ernest_cpp.evaluate import LEARNED, controllers
+
+    old = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        env = ErnestSB3VecEnv("ernest/Ripples-v0", 2, **KW)
+        torch.manual_seed(0)
+        model = TD3("MlpPolicy", env, learning_starts=50, batch_size=32, buffer_size=1000,
+                    policy_kwargs={"net_arch": [32, 24]}, seed=0, device="cpu", verbose=0)
+        model.learn(total_timesteps=120)
+        env.close()
+        model.save(tmp_path / "td3.zip")
+        policy = tmp_path / "policy.pt"
+        assert cli.main(["export", str(tmp_path / "td3.zip"), "--out", str(policy)]) == 0
+
+        learned, passive = controllers(str(policy))[LEARNED]  # ernest evaluate's checks and path
+        assert not passive
+        genv = gym.make("ernest/Ripples-v0", episode_length=5.0)
+        obs, _ = genv.reset(seed=2)
+        ours = []
+        while True:
+            a = np.asarray(learned(obs))
+            sb3, _ = model.predict(obs, deterministic=True)
+            np.testing.assert_allclose(a, sb3, rtol=0, atol=1e-5)
+            ours.append(a)
+            obs, _, term, trunc, _ = genv.step(a)
+            if term or trunc:
+                break
+        ours = np.array(ours)
+        assert len(ours) == 10 and np.ptp(ours, axis=0).max() > 1e-3  # it acts, and not constantly
+
+        out = tmp_path / "actions.csv"
+        r = subprocess.run([_runtime_exe(), "--policy", str(policy), "--scenario", "ripples",
+                            "--seed", "2", "--duration", "5", "--actions", str(out)],
+                           capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stdout + r.stderr
+        cpp = np.loadtxt(out, delimiter=",", skiprows=1)[:, 1:]
+        np.testing.assert_allclose(cpp, ours, rtol=0, atol=1e-5)
+    finally:
+        torch.set_num_threads(old)
+    with pytest.raises(Exception, match="TD3"):  # not a model: refused, naming what it expects
+        from ernest_cpp.rl.export import actor_from_sb3
+        (tmp_path / "junk.zip").write_bytes(b"not a zip")
+        actor_from_sb3(tmp_path / "junk.zip")

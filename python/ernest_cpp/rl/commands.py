@@ -176,12 +176,21 @@ def _export(args) -> int:
     from .export import export_actor
     from .checkpoints import agent_from_checkpoint, load_checkpoint
 
-    ck = load_checkpoint(args.checkpoint, with_buffer=False)
-    agent = agent_from_checkpoint(ck)
-    lay = L.ObservationLayout.from_dict(ck["state"]["layout"])
-    meta = export_actor(agent.actor, lay, args.out, args.policy_rate,
-                        {"source_checkpoint": os.path.abspath(ck["path"]),
-                         "env_id": ck["state"]["env_id"]})
+    if args.checkpoint.endswith(".zip") and os.path.isfile(args.checkpoint):
+        # A Stable-Baselines3 TD3 model trained on an ernest env: its actor and the envs' layout.
+        from ..envs.core import make_options, observation_layout
+        from .export import actor_from_sb3
+
+        actor = actor_from_sb3(args.checkpoint)
+        lay = observation_layout(make_options())
+        extra = {"source_checkpoint": os.path.abspath(args.checkpoint),
+                 "source": "stable-baselines3 TD3"}
+    else:
+        ck = load_checkpoint(args.checkpoint, with_buffer=False)
+        actor = agent_from_checkpoint(ck).actor
+        lay = L.ObservationLayout.from_dict(ck["state"]["layout"])
+        extra = {"source_checkpoint": os.path.abspath(ck["path"]), "env_id": ck["state"]["env_id"]}
+    meta = export_actor(actor, lay, args.out, args.policy_rate, extra)
     print(f"wrote {args.out}: {meta['obs_dim']} -> {meta['act_dim']}, layout "
           f"{meta['layout_version']}, {meta['policy_rate_hz']} Hz, verified against the Python "
           f"actor (max abs error {meta['verified_max_abs_error']:.2g})")
@@ -245,7 +254,8 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=_consolidate)
 
     p = subparsers.add_parser("export", help="export an actor to TorchScript with its scaling")
-    p.add_argument("checkpoint", help="run, consolidation or checkpoint folder")
+    p.add_argument("checkpoint", help="run, consolidation or checkpoint folder, or the .zip of a "
+                   "Stable-Baselines3 TD3 model trained on an ernest env")
     p.add_argument("--out", required=True, help="output .pt file")
     p.add_argument("--policy-rate", type=_args.positive_finite, default=2.0,
                    help="policy rate in Hz, finite and > 0 (Table 5: 2)")

@@ -20,6 +20,7 @@ The metadata itself must pass the runtime's checks (policy_file.check_generic on
 check_runtime in ``ernest evaluate``).
 """
 
+import copy
 import hashlib
 import json
 import os
@@ -73,6 +74,55 @@ class ExportedPolicy(nn.Module):
         return self.act_low + (u + 1.0) * 0.5 * (self.act_high - self.act_low)
 
 
+class SequentialActor(nn.Module):
+    """An actor given as a module mapping the normalised observation to actions in [-1, 1] (e.g.
+    Stable-Baselines3 TD3's ``actor.mu``: Linear/ReLU layers ending in tanh), with the sizes
+    ``export_actor`` checks against the layout."""
+
+    def __init__(self, net: nn.Module, obs_dim: int, act_dim: int):
+        super().__init__()
+        self.net, self.obs_dim, self.act_dim = net, int(obs_dim), int(act_dim)
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.net(obs)
+
+
+def actor_from_sb3(model) -> SequentialActor:
+    """The deterministic actor of a Stable-Baselines3 TD3 model (an object or the path of its
+    ``.zip``), for ``export_actor``. The model must have been trained on an ernest env directly
+    (45 normalised observation values, 3 actions in [-1, 1]; no VecNormalize, whose statistics
+    live outside the zip): then its ``actor.mu`` is the whole policy, as for our own actor.
+    Raises ExportError otherwise."""
+    if isinstance(model, (str, os.PathLike)):
+        try:
+            from stable_baselines3 import TD3
+        except ImportError:
+            raise ExportError("reading a Stable-Baselines3 model needs stable-baselines3 "
+                              "(pip install ernest-cpp[sb3])") from None
+        try:
+            model = TD3.load(os.fspath(model), device="cpu")
+        except Exception as exc:  # a zip of another algorithm, or not a model at all
+            raise ExportError(f"{os.fspath(model)}: not a Stable-Baselines3 TD3 model "
+                              f"({type(exc).__name__}: {exc})") from None
+    obs_space, act_space = model.observation_space, model.action_space
+    if len(getattr(obs_space, "shape", ())) != 1 or len(getattr(act_space, "shape", ())) != 1:
+        raise ExportError(f"the model's spaces {obs_space} / {act_space} are not flat Boxes")
+    low, high = np.asarray(act_space.low), np.asarray(act_space.high)
+    if not (np.allclose(low, -1.0) and np.allclose(high, 1.0)):
+        raise ExportError(f"the model's action space is [{low.tolist()}, {high.tolist()}]; the "
+                          "ernest environments' is [-1, 1] (the export scales it to commands)")
+    actor = getattr(getattr(model, "policy", None), "actor", None)
+    if actor is None or not hasattr(actor, "mu"):
+        raise ExportError(f"{type(model).__name__} has no deterministic actor (policy.actor.mu): "
+                          "only TD3 (and DDPG) models can be exported")
+    if not isinstance(actor.features_extractor, nn.Flatten) and \
+            type(actor.features_extractor).__name__ != "FlattenExtractor":
+        raise ExportError(f"the model's features extractor {type(actor.features_extractor).__name__} "
+                          "is not the plain flatten of MlpPolicy")
+    net = copy.deepcopy(actor.mu).to("cpu").float().eval()
+    return SequentialActor(net, obs_space.shape[0], act_space.shape[0])
+
+
 def metadata(lay: L.ObservationLayout, policy_rate_hz: float, extra: dict | None = None) -> dict:
     return {"format": "ernest-policy-v1", "layout_version": lay.version,
             "obs_dim": lay.obs_dim, "act_dim": lay.act_dim, "policy_rate_hz": policy_rate_hz,
@@ -81,7 +131,7 @@ def metadata(lay: L.ObservationLayout, policy_rate_hz: float, extra: dict | None
             "action_high": lay.action_high.tolist(), **(extra or {})}
 
 
-def reference_actions(actor: Actor, lay: L.ObservationLayout, obs_raw: np.ndarray) -> np.ndarray:
+def reference_actions(actor: nn.Module, lay: L.ObservationLayout, obs_raw: np.ndarray) -> np.ndarray:
     """The Python path: normalise in numpy, run the actor, scale the action in numpy."""
     x = (obs_raw.astype(np.float64) - lay.offset) / lay.scale
     with torch.no_grad():
@@ -226,20 +276,25 @@ def stamp_policy(path: str) -> dict:
     return meta
 
 
-def export_actor(actor: Actor, lay: L.ObservationLayout, path: str,
+def export_actor(actor: nn.Module, lay: L.ObservationLayout, path: str,
                  policy_rate_hz: float = L.POLICY_RATE_HZ, extra_meta: dict | None = None,
                  atol: float = 1e-5) -> dict:
-    """Script, save, reload and verify; returns the metadata. Raises ExportError on mismatch or
-    on a policy rate that is not a finite number > 0."""
+    """Script, save, reload and verify; returns the metadata. ``actor``: our ``Actor`` or any
+    module with ``obs_dim``/``act_dim`` mapping normalised observations to [-1, 1] actions
+    (``SequentialActor``, ``actor_from_sb3``). Raises ExportError on mismatch or on a policy rate
+    that is not a finite number > 0."""
     if not (isinstance(policy_rate_hz, (int, float)) and np.isfinite(policy_rate_hz)
             and policy_rate_hz > 0):
         raise ExportError(f"policy_rate_hz = {policy_rate_hz!r} must be a finite number > 0 [Hz]")
     if actor.obs_dim != lay.obs_dim or actor.act_dim != lay.act_dim:
         raise ExportError(f"actor sizes {actor.obs_dim}/{actor.act_dim} do not match the layout "
                           f"{lay.obs_dim}/{lay.act_dim}")
-    src = actor
-    actor = Actor(src.obs_dim, src.act_dim, src.hidden)
-    actor.load_state_dict(src.state_dict())
+    if isinstance(actor, Actor):
+        src = actor
+        actor = Actor(src.obs_dim, src.act_dim, src.hidden)
+        actor.load_state_dict(src.state_dict())
+    else:  # the caller's module stays untouched (and on its device)
+        actor = copy.deepcopy(actor).to("cpu")
     actor.eval()
     meta = metadata(lay, policy_rate_hz, extra_meta)
     with _quiet_jit():
