@@ -16,6 +16,7 @@ import os
 
 import numpy as np
 
+from ._csv import header
 from . import _args
 from . import dynamics as D
 from . import perception as P
@@ -45,6 +46,11 @@ def chassis_pose(sc, k: int, step: float = 0.4):
     y = sc.start_y + k * step * math.sin(h)
     rot = np.array([[math.cos(h), -math.sin(h), 0.0], [math.sin(h), math.cos(h), 0.0], [0, 0, 1.0]])
     return np.array([x, y, sc.height(x, y) + CHASSIS_HEIGHT]), rot
+
+
+#: Units of summary.csv's columns (its header reads ``name [unit]``).
+SUMMARY_UNITS = {"frame": "-", "points": "-", "cells": "-", "rms": "m", "normalised_variance": "-",
+                 "coverage": "-"}
 
 
 def frame_metrics(mapper: "P.StereoMapper", radius: float = 3.0) -> dict[str, float]:
@@ -154,9 +160,9 @@ def run(scenario: str, out: str, frames: int = 4, seed: int = 0,
               f"RMS {row['rms'] * 100:.2f} cm, normalised variance {row['normalised_variance']:.2f}, "
               f"coverage {row['coverage'] * 100:.0f} %")
     with open(os.path.join(out, "summary.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+        w = csv.writer(f)
+        w.writerow(header(rows[0], SUMMARY_UNITS))
+        w.writerows([r[k] for k in rows[0]] for r in rows)
     print(f"wrote {frames} frame views and summary.csv to {out}")
     return rows
 

@@ -192,8 +192,9 @@ def main_args(args: argparse.Namespace) -> int:
         fh.write(summary + "\n")
     with open(os.path.join(args.out, "slope_runs.csv"), "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["soil", "controller", "t", "x", "y", "z", "psi", "phi", "roll_torque",
-                    "energy", "load_FL", "load_FR", "load_RL", "load_RR"])
+        w.writerow(["soil [-]", "controller [-]", "t [s]", "x [m]", "y [m]", "z [m]", "psi [rad]",
+                    "phi [rad]", "roll_torque [N m]", "energy [J]", "load_FL [N]", "load_FR [N]",
+                    "load_RL [N]", "load_RR [N]"])
         for soil, runs in all_runs.items():
             for r in runs:
                 for k in range(0, len(r["t"]), 5):

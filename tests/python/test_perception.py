@@ -173,7 +173,7 @@ def test_perception_command_writes_views(tmp_path, capsys):
     assert cli_main(["perception", "--scenario", "rockfield", "--out", str(out), "--frames", "2"]) == 0
     assert (out / "frame_0.png").stat().st_size > 10000 and (out / "frame_1.png").exists()
     lines = (out / "summary.csv").read_text().splitlines()
-    assert lines[0].startswith("frame,points,cells,rms")
+    assert lines[0].startswith("frame [-],points [-],cells [-],rms [m]")  # units in the header
     rms = [float(line.split(",")[3]) for line in lines[1:]]
     assert all(0.0 < r < 0.05 for r in rms)
     assert "RMS" in capsys.readouterr().out

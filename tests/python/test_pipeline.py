@@ -44,7 +44,7 @@ def test_pipeline_trains_consolidates_exports_and_resumes(tmp_path):
             prog = json.load(fh)
         assert prog["step"] == 40 and prog["transitions_per_s"] > 0 and prog["updates_per_s"] > 0
         rows = open(os.path.join(out, name, "eval.csv")).read().splitlines()
-        assert "elapsed_s" in rows[0].split(",") and len(rows) == 3  # evaluations at 20 and 40
+        assert "elapsed_s [s]" in rows[0].split(",") and len(rows) == 3  # evaluations at 20 and 40
     assert any("transitions/s" in ln for ln in lines)  # progress lines while they ran
     module, meta = load_policy(cfg["policy"])  # exported, checksummed, loadable
     assert meta["obs_dim"] == 45 and meta["act_dim"] == 3

@@ -352,6 +352,9 @@ def test_td3_learns_point_mass(tmp_path):
     assert res["baseline"]["return"] == pytest.approx(zero, rel=1e-6)
     rows = open(tmp_path / "run" / "eval.csv").read().splitlines()
     assert len(rows) == 1 + 1 + 3  # header, the manual evaluation, three periodic ones
+    names = rows[0].split(",")  # each header names its unit
+    assert "return [-]" in names and "step [transitions]" in names and "elapsed_s [s]" in names
+    assert all(n.endswith("]") and " [" in n for n in names), names
 
 
 def test_resume_gives_the_same_updates(tmp_path):

@@ -25,6 +25,7 @@ import numpy as np
 import torch
 import yaml
 
+from .._csv import bare, header as csv_header
 from .checkpoints import STEP_DIR, check_resume_config, load_checkpoint
 from .envs_util import (autoreset_mode, check_spaces, env_layout, evaluate, make_env,
                         make_vector_env, noise_for, resolve_env_id, step_transitions, to_env_action)
@@ -41,6 +42,16 @@ def _rng_state(rng: np.random.Generator) -> dict:
 
 def _set_rng_state(rng: np.random.Generator, state: dict) -> None:
     rng.bit_generator.state = state
+
+
+#: Units of eval.csv's columns (its header reads ``name [unit]``); an info key not listed here (an
+#: env's own) is written with ``[?]``.
+EVAL_UNITS = {"step": "transitions", "elapsed_s": "s", "return": "-", "return_std": "-",
+              "length": "policy steps", "path_progress": "m", "episode_metrics.progress": "m",
+              "episode_metrics.expected_progress": "m", "episode_metrics.distance": "m",
+              "episode_metrics.travel_reduction": "-", "episode_metrics.cost_of_transport": "-",
+              "episode_metrics.energy": "J", "episode_metrics.time": "s",
+              "episode_metrics.mean_abs_roll_torque": "N m"}
 
 
 class Trainer:
@@ -214,7 +225,7 @@ class Trainer:
             lines = fh.read().splitlines()
         if not lines:
             return
-        header = lines[0].split(",")
+        header = [bare(h) for h in lines[0].split(",")]
         if "step" not in header:
             return
         col = header.index("step")
@@ -247,7 +258,7 @@ class Trainer:
         keys = sorted(res)
         with open(path, "a") as fh:
             if new:
-                fh.write(",".join(keys) + "\n")
+                fh.write(",".join(csv_header(keys, EVAL_UNITS, "?")) + "\n")
             fh.write(",".join(f"{res[k]:.6g}" for k in keys) + "\n")
         return res
 

@@ -7,6 +7,8 @@ from __future__ import annotations
 import csv
 import os
 
+from .._csv import bare
+
 
 def _selection_section(out: str, top: int = 10) -> list[str]:
     """The select stage's best candidates (``selection.csv``; the last row is the crawling gait's
@@ -35,10 +37,13 @@ def _selection_section(out: str, top: int = 10) -> list[str]:
     return md + [""]
 
 
-def _rows(path: str) -> list[dict]:
+def _rows(path: str, bare_names: bool = False) -> list[dict]:
+    """The rows of a CSV file, keyed by its headers or (``bare_names``) by the headers without
+    their units (eval.csv: 'return [-]' -> 'return')."""
+    key = bare if bare_names else str
     try:
         with open(path, newline="") as fh:
-            return [{k: _num(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+            return [{key(k): _num(v) for k, v in r.items()} for r in csv.DictReader(fh)]
     except OSError:
         return []
 
@@ -84,7 +89,8 @@ def plot_curves(curves: dict, path: str) -> str | None:
 
 
 def write_report(cfg: dict, out: str) -> str:
-    curves = {name: _rows(os.path.join(out, name, "eval.csv")) for name in cfg["specialists"]}
+    curves = {name: _rows(os.path.join(out, name, "eval.csv"), bare_names=True)
+              for name in cfg["specialists"]}
     png = plot_curves(curves, os.path.join(out, "curves.png"))
     md = ["# Default policy training", "", f"Pipeline: `ernest train-default` ({out}).", ""]
     if png:
