@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "ernest/common/validation.hpp"
+#include "sha256_hex.hpp"
 
 namespace ernest::runtime {
 
@@ -146,16 +147,7 @@ std::string weights_sha256(const torch::jit::Module& module) {
     EVP_DigestUpdate(ctx.get(), head.data(), head.size());
     EVP_DigestUpdate(ctx.get(), t.data_ptr<float>(), static_cast<size_t>(t.numel()) * sizeof(float));
   }
-  unsigned char md[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  EVP_DigestFinal_ex(ctx.get(), md, &len);
-  static const char* hex = "0123456789abcdef";
-  std::string out;
-  for (unsigned int i = 0; i < len; ++i) {
-    out += hex[md[i] >> 4];
-    out += hex[md[i] & 15];
-  }
-  return out;
+  return finish_hex(ctx.get());
 }
 
 PolicyMetadata check_metadata(const std::string& text, const PolicyExpectations& expect,

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "ernest/runtime/policy.hpp"
+#include "sha256_hex.hpp"
 
 namespace ernest::runtime {
 
@@ -51,16 +52,7 @@ std::string policy_sha256(const std::string& path, const std::string& digest_in_
     throw PolicyError(PolicyError::Kind::CorruptFile, path + ": cannot read the archive's records (" +
                                                           std::string(e.what()).substr(0, 200) + ")");
   }
-  unsigned char md[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  EVP_DigestFinal_ex(ctx.get(), md, &len);
-  static const char* hex = "0123456789abcdef";
-  std::string out;
-  for (unsigned int i = 0; i < len; ++i) {
-    out += hex[md[i] >> 4];
-    out += hex[md[i] & 15];
-  }
-  return out;
+  return finish_hex(ctx.get());
 }
 
 }  // namespace ernest::runtime
