@@ -254,6 +254,15 @@ def test_ring_buffer_wraps_and_keeps_order():
     assert buf.ptr == 155 % 100
 
 
+def test_sample_draws_extra_rows_with_the_same_indices():
+    buf = _filled_buffer(n=50, cap=50)  # rewards are the row numbers
+    tag = np.arange(50, dtype=np.float32) * 10
+    a = buf.sample(32, np.random.default_rng(3), rows={"tag": tag})
+    b = buf.sample(32, np.random.default_rng(3))
+    np.testing.assert_array_equal(a["tag"], a["rew"] * 10)  # the same rows
+    np.testing.assert_array_equal(a["obs"], b["obs"])  # and the same draw as without rows
+
+
 def test_buffer_refuses_non_finite_transitions():
     buf = _filled_buffer(n=10, cap=20)
     size = buf.size
@@ -629,6 +638,21 @@ def test_consolidation_continues_a_given_agent_on_relabelled_rewards(tmp_path, c
         moved[w] = sum(float((a[k] - v).abs().sum()) for k, v in first["agent"]["actor"].items())
     assert "held by an anchor of weight 1000" in capsys.readouterr().out
     assert moved[1000] < moved[0], moved
+    # the anchor on the rows of named runs only: here the one run, so the same as every row
+    d = str(tmp_path / "anchor-rows")
+    assert cli.main(["consolidate", run, "--out", d, "--set", "consolidate.iterations=10",
+                     "--set", f"consolidate.init={first['path']}", "--set", "consolidate.lr=1e-3",
+                     "--set", "consolidate.anchor=1000", "--set", "consolidate.anchor_runs=[run]"]
+                    + small) == 0
+    assert "on the rows of run" in capsys.readouterr().out
+    a = load_checkpoint(d, with_buffer=False)["agent"]["actor"]
+    for k, v in load_checkpoint(str(tmp_path / "anchor1000"), with_buffer=False)["agent"]["actor"].items():
+        torch.testing.assert_close(a[k], v, rtol=0, atol=0)
+    for bad in ("[nope]", "[]", "run"):
+        assert cli.main(["consolidate", run, "--out", str(tmp_path / "bad5"), "--set",
+                         f"consolidate.init={first['path']}", "--set", "consolidate.anchor=1",
+                         "--set", f"consolidate.anchor_runs={bad}"] + small) == 2
+        assert "consolidate.anchor_runs" in capsys.readouterr().err
     assert cli.main(["consolidate", run, "--out", str(tmp_path / "bad2"), "--set",
                      f"consolidate.init={first['path']}", "--set", "consolidate.hidden=32",
                      "--set", "log.progress_bar=false", "--no-eval"]) == 2

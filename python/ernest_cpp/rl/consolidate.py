@@ -58,12 +58,14 @@ def pool_buffers(sources: list, per_run: int, capacity: int | None = None,
 
 def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, seed: int = 0,
                     progress=None, device: str = "cpu", snapshot=None,
-                    init: dict | None = None, anchor: float = 0.0) -> tuple[TD3, dict]:
+                    init: dict | None = None, anchor: float = 0.0,
+                    anchor_mask: np.ndarray | None = None) -> tuple[TD3, dict]:
     """TD3 trained for ``iterations`` updates on ``buffer`` alone (no environment), its
     networks on ``device`` (a torch device, e.g. ``resolve_device("auto")``): fresh (§4.6), or
     continued from ``init`` (a ``TD3.state_dict()``; networks, targets and Adam moments, at
     ``td3_cfg``'s learning rates; with ``anchor`` > 0 its actor is held near ``init``'s by
-    ``TD3.set_anchor``). ``snapshot(done, agent)``, if given, is called after every
+    ``TD3.set_anchor``, on the rows where ``anchor_mask`` is 1 if it is given).
+    ``snapshot(done, agent)``, if given, is called after every
     update (it decides whether to keep the agent)."""
     agent = TD3(buffer.obs_dim, buffer.act_dim, td3_cfg, seed=seed, device=device)
     if init is not None:
@@ -75,7 +77,8 @@ def train_on_buffer(buffer: ReplayBuffer, td3_cfg: TD3Config, iterations: int, s
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0xC0]))
     losses, t0 = [], time.perf_counter()
     for it in range(int(iterations)):
-        m = agent.update(buffer.sample(td3_cfg.batch_size, rng))
+        rows = None if anchor_mask is None else {"anchor_mask": anchor_mask}
+        m = agent.update(buffer.sample(td3_cfg.batch_size, rng, rows=rows))
         losses.append(m["critic_loss"])
         if progress is not None:
             progress(it + 1, m)
@@ -152,6 +155,7 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
             relabel_lateral(part, lat, lay.scale[lat], w_from, w_to)
     pool = pool_buffers([s["buffer"] for s in specialists], int(c["per_run"]),
                         int(c["buffer_size"]), relabel)
+    part_sizes = [min(int(c["per_run"]), len(s["buffer"])) for s in specialists]  # pool order
     for s in specialists:  # the pool holds what is needed; free the full buffers
         s.pop("buffer", None)
     pool.set_noise(*noise_for(cfg["noise"], lay))
@@ -168,6 +172,17 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
                          f"(0: no anchor)")
     if anchor and not c.get("init"):
         raise ValueError("consolidate.anchor holds the actor near consolidate.init's: give an init")
+    held = c.get("anchor_runs")
+    mask = None
+    if held is not None:  # anchor only the rows of these specialists (by run folder name)
+        names = [os.path.basename(os.path.normpath(r)) for r in runs]
+        if (not anchor or not isinstance(held, list) or not held
+                or any(not isinstance(h, str) or h not in names for h in held)):
+            raise ValueError(f"consolidate.anchor_runs = {held!r} must be null or a non-empty "
+                             f"list of the consolidated runs' folder names {names}, with "
+                             f"consolidate.anchor > 0")
+        mask = np.repeat(np.array([float(n in held) for n in names], np.float32), part_sizes)
+        assert mask.size == len(pool)
     if c.get("init"):  # continue a consolidated agent instead of a fresh one
         ck = load_checkpoint(str(c["init"]), with_buffer=False)
         st = ck["state"]
@@ -178,7 +193,8 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
                              f"and consolidate.hidden need {(pool.obs_dim, pool.act_dim, td3_cfg.hidden)}")
         init = ck["agent"]
         log(f"  continuing {ck['path']} at lr {td3_cfg.actor_lr:g}"
-            + (f", its actor held by an anchor of weight {anchor:g}" if anchor else ""))
+            + (f", its actor held by an anchor of weight {anchor:g}" if anchor else "")
+            + (f" on the rows of {', '.join(held)}" if mask is not None else ""))
     bar = None
     if cfg["log"]["progress_bar"]:
         from tqdm import tqdm
@@ -210,7 +226,7 @@ def consolidate_runs(runs: list[str], cfg: dict, out_dir: str, evaluate_policies
                          state_of(agent, info))
 
     agent, info = train_on_buffer(pool, td3_cfg, total, int(cfg["seed"]), progress, device,
-                                  snapshot if every else None, init, float(anchor))
+                                  snapshot if every else None, init, float(anchor), mask)
     if bar:
         bar.close()
     log(f"  {info['iterations']} iterations in {info['seconds']:.1f} s on {device}")

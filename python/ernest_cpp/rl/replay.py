@@ -87,12 +87,17 @@ class ReplayBuffer:
         self.size = min(self.size + n, self.capacity)
         self.total_added += n
 
-    def sample(self, batch_size: int, rng: np.random.Generator, noise: bool = True) -> dict:
+    def sample(self, batch_size: int, rng: np.random.Generator, noise: bool = True,
+               rows: dict | None = None) -> dict:
+        """``rows``: further per-transition arrays (one entry per stored row) drawn with the
+        same indices into the batch under their keys (e.g. ``anchor_mask``)."""
         if self.size == 0:
             raise ValueError("cannot sample from an empty replay buffer")
         i = rng.integers(0, self.size, size=batch_size)
         batch = {"obs": self.obs[i], "act": self.act[i], "rew": self.rew[i],
                  "next_obs": self.next_obs[i], "done": self.done[i]}
+        for k, v in (rows or {}).items():
+            batch[k] = v[i]
         if noise and self.noise_idx.size:
             k = self.noise_idx.size
             z = rng.standard_normal((2, batch_size, k), dtype=np.float32) * self.noise_std
