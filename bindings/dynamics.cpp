@@ -187,16 +187,12 @@ void bind_dynamics(py::module_& m) {
       .def_readwrite("soil_normal_damping", &SimOptions::soil_normal_damping,
                      "soil normal damping [N s/m per wheel]: F_n = max(0, F_z - c v_n) (assumption)")
       .def_readwrite("rigid", &SimOptions::rigid, "ernest_cpp.soil.RigidContactParameters")
-      // Python sees None for "drawn", not the C++ struct's negative marker, and a set value
-      // must be a real coefficient.
+      // a set value must be a real coefficient, checked when set (and by validate())
       .def_property(
-          "friction",
-          [](const SimOptions& o) -> std::optional<double> {
-            return o.friction < 0.0 ? std::nullopt : std::optional<double>(o.friction);
-          },
+          "friction", [](const SimOptions& o) { return o.friction; },
           [](SimOptions& o, std::optional<double> mu) {
             if (mu) ernest::require_in_range("SimOptions", "friction", *mu, 0.0, 10.0);
-            o.friction = mu ? *mu : -1.0;
+            o.friction = mu;
           },
           "Coulomb friction of the obstacles and rigid ground, [0, 10]; None (default) draws it "
           "from rigid with the seed")

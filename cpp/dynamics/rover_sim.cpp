@@ -79,9 +79,7 @@ void SimOptions::validate() const {
                    soil::BekkerWongModel::kMaxPointsPerPanel);
   require_in_range(o, "soil_normal_damping", soil_normal_damping, 1e-3, 1e7);
   rigid.validate();
-  require(std::isfinite(friction) && friction <= 10.0,
-          "SimOptions.friction = " + std::to_string(friction) +
-              " must be finite and <= 10 (< 0 draws it from rigid)");
+  if (friction) require_in_range(o, "friction", *friction, 0.0, 10.0);  // unset: drawn
   require_in_range(o, "rigid_slip", rigid_slip, 0.0, 1.0);
   require_in_range(o, "rigid_tyre_stiffness_x", rigid_tyre_stiffness_x, 0.0, 1e8);
   require_in_range(o, "rigid_tyre_stiffness_y", rigid_tyre_stiffness_y, 0.0, 1e8);
@@ -133,7 +131,7 @@ RoverModel::RoverModel(const RoverParameters& params, const HeightMap& terrain,
            options.soil_points_per_panel),
       mu([&] {
         std::mt19937_64 rng(options.seed);
-        return options.friction >= 0.0 ? options.friction : options.rigid.sample_friction(rng);
+        return options.friction ? *options.friction : options.rigid.sample_friction(rng);
       }()) {}
 
 RoverModel::~RoverModel() {

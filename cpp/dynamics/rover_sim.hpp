@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -61,9 +62,9 @@ struct SimOptions {
   /// F_z linearised in the sinkage (backward Euler: the damper grows by dt dF_z/dz).
   double soil_normal_damping = 1500.0;
   soil::RigidContactParameters rigid{};   ///< §3.4 spring–damper -> ODE ERP/CFM for dt
-  /// Coulomb friction of the obstacles and of rigid ground; < 0 draws it once from
+  /// Coulomb friction of the obstacles and of rigid ground, [0, 10]; nullopt draws it once from
   /// rigid.sample_friction(rng(seed)) ("per obstacle set").
-  double friction = -1.0;
+  std::optional<double> friction;
   /// Tangential compliance of the tyre on rigid obstacles [(m/s)/N] (assumption, ours): ODE's
   /// force-dependent slip, so that wheels with slightly different rolling radii do not fight
   /// each other through perfectly sticking contacts. 1e-4 = 1 cm/s of creep at 100 N. Per

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <stdexcept>
 
 #include "ernest/dynamics/batch_stepper.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
@@ -718,4 +719,18 @@ TEST(GimbalSuspension, AxesAreBodyAxesOnATerrainSlopedAtTheOrigin) {
     EXPECT_LT(std::abs(rot(0).col(2).dot(rot(1).col(0))), 1e-6) << heading;
     EXPECT_NEAR(sim.state().gimbal_yaw, 40 * kDeg, 1e-3);
   }
+}
+
+TEST(SimOptions, FrictionIsUnsetOrARealCoefficient) {
+  // Unset means "drawn from rigid with the seed"; a set value must be a real coefficient (no
+  // negative "draw it" marker).
+  SimOptions o;
+  EXPECT_FALSE(o.friction.has_value());
+  o.validate();
+  for (double mu : {-1.0, 11.0, std::nan("")}) {
+    o.friction = mu;
+    EXPECT_THROW(o.validate(), std::invalid_argument) << mu;
+  }
+  o.friction = 0.8;
+  o.validate();
 }
