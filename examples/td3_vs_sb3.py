@@ -98,9 +98,10 @@ def main() -> None:
         print(f"{'best possible':28s}: mean return {np.mean(best):8.3f}")
     path = os.path.join(args.out, "td3_vs_sb3.csv")
     with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+        units = {"learner": "-", "steps": "transitions", "train_s": "s", "mean_return": "-"}
+        w = csv.writer(fh)
+        w.writerow([f"{k} [{units[k]}]" for k in rows[0]])  # each header names its unit
+        w.writerows([r[k] for k in rows[0]] for r in rows)
     print(f"wrote {path}")
 
 

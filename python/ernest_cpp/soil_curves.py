@@ -37,8 +37,9 @@ def write_csv(rows: list[dict], path: str) -> None:
     tmp = path + ".tmp"
     with open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["soil", "planet", "load_N", "slip", "model_slip", "sinkage_m",
-                    "drawbar_pull_N", "normal_force_N", "torque_Nm", "converged"])
+        w.writerow(["soil [-]", "planet [-]", "load [N]", "slip [-]", "model_slip [-]",
+                    "sinkage [m]", "drawbar_pull [N]", "normal_force [N]", "torque [N m]",
+                    "converged [-]"])
         for r in rows:
             for i in range(len(r["slip"])):
                 w.writerow([r["soil"], r["planet"], f"{r['load']:.3f}", f"{r['slip'][i]:.4f}",

@@ -121,6 +121,7 @@ def test_soil_curves_command_writes_csv_and_plots(tmp_path, capsys):
     with open(out / "soil_curves.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == 3 * 2 * 9
-    assert {r["soil"] for r in rows} == {"dry_sand", "m90", "wet_sand"}
+    assert {r["soil [-]"] for r in rows} == {"dry_sand", "m90", "wet_sand"}
+    assert "drawbar_pull [N]" in rows[0] and "sinkage [m]" in rows[0]  # units in the header
     assert "| m90 | Mars |" in capsys.readouterr().out
     assert cli_main(["soil-curves", "--out", str(out), "--points", "0"]) == 2
