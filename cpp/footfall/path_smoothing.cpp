@@ -19,6 +19,8 @@ void SmoothingOptions::validate() const {
   require_in_range(o, "min_improvement", min_improvement, 0.0, 1.0);
   require_in_range(o, "max_iterations", max_iterations, 1, 1000);
   require_in_range(o, "max_nodes", max_nodes, 2, 100000);
+  require_in_range(o, "torque_resolution", torque_resolution, 1e-3, 1.0);
+  require_in_range(o, "torque_tolerance", torque_tolerance, 0.0, 1.0);
 }
 
 namespace {

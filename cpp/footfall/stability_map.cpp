@@ -20,6 +20,9 @@ void StabilityMapOptions::validate() const {
   require_in_range(o, "min_margin", min_margin, -10.0, 10.0);
   require_in_range(o, "slope_threshold", slope_threshold, 0.0, 1.5);
   require_in_range(o, "ik_evaluations", ik_evaluations, 5, 10000);
+  if (!(max_saturation >= 0.0))  // NaN and negative values
+    throw std::invalid_argument("StabilityMapOptions.max_saturation = " + std::to_string(max_saturation) +
+                                " is outside the allowed range [0, inf]");
 }
 
 int StabilityMap::count(CellStatus s) const {
@@ -76,6 +79,7 @@ StabilityMapper::StabilityMapper(const walker::WalkerModel& model, const dynamic
   q_start_above_ = q.col(leg);
   const Eigen::Vector3d c0 = contacts_.col(leg);
   start_ok_ = solve(target(c0, options.lift_height), q.col(leg), q_start_above_);
+  if (options.evaluates_torques()) torques_ = std::make_unique<StanceTorques>(model, body, q, leg);
 }
 
 StabilityMapper::~StabilityMapper() = default;
@@ -115,6 +119,16 @@ CellEvaluation StabilityMapper::evaluate(double x, double y, const Eigen::Ref<co
   const statics::StabilityMargins m = statics::stability_margins(contacts_, e.cg, gravity_);
   e.margin = nesm_ ? m.nesm_cps : m.ssm_cps;
   e.status = e.margin > options_.min_margin ? CellStatus::kStable : CellStatus::kUnstable;
+  if (torques_) {  // §7.1: the load-bearing workspace within the reachable one
+    const TorquePeak down = torques_->down(e.q), lifted = torques_->lifted(e.q_above);
+    e.saturation_down = down.saturation;
+    e.saturation_lifted = lifted.saturation;
+    const TorquePeak& peak = down.saturation >= lifted.saturation ? down : lifted;
+    e.saturation = peak.saturation;
+    e.peak_leg = peak.leg;
+    e.peak_joint = peak.joint;
+    if (e.status == CellStatus::kStable && e.saturation > options_.max_saturation) e.status = CellStatus::kOverloaded;
+  }
   return e;
 }
 
@@ -134,6 +148,8 @@ StabilityMap StabilityMapper::map() {
   out.origin_y = out.hip.y() - half * options_.cell;
   out.status.setConstant(side, side, static_cast<std::uint8_t>(CellStatus::kUnreachable));
   out.margin.setConstant(side, side, std::numeric_limits<double>::quiet_NaN());
+  out.saturation.setConstant(side, side, std::numeric_limits<double>::quiet_NaN());
+  if (torques_ && start_ok_) out.lift_saturation = torques_->lifted(q_start_above_).saturation;
   const long solves0 = solves_;
   if (!start_ok_) return out;  // no step can leave the current foot (§3.3)
   // Breadth-first from the cell under the current foot: each cell's IK starts from a solved
@@ -174,6 +190,7 @@ StabilityMap StabilityMapper::map() {
     if (e.status != CellStatus::kUnreachable) {
       out.status(i, j) = static_cast<std::uint8_t>(e.status);
       out.margin(i, j) = e.margin;
+      out.saturation(i, j) = e.saturation;
     }
     // Only cells with a ground solution seed and expand: the reachable region is connected
     // (continuous IK), so its unreachable border is evaluated once and nothing beyond it.

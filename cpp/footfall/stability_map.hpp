@@ -4,20 +4,30 @@
 // standard stance), the compliance waypoint directly above it reachable too, and then the new
 // centre of gravity, the Conservative Polygon of Support of the new stance and its SSM or, on
 // slopes, NESM (cpp/statics). Cells are stable (green), unstable (red) or unreachable (none).
+// Torque-aware maps (§7.1: "the kinematically reachable workspace of the robot is much larger than
+// the load-bearing workspace"): optionally every reachable cell's peak static joint torque over
+// the stance after the step and the stance during it with the swing leg at the waypoint above the
+// cell (StanceTorques), and stable cells above a chosen fraction of a torque limit are a third
+// class, overloaded. An infinite limit with torques off gives the plain map bit for bit (test).
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
+#include <memory>
 
 #include "ernest/dynamics/terrain.hpp"
+#include "ernest/footfall/stance_torque.hpp"
 #include "ernest/walker/leg_ik.hpp"
 #include "ernest/walker/walker_model.hpp"
 
 namespace ernest::footfall {
 
 enum class StabilityCriterion { kAuto, kSsm, kNesm };
-enum class CellStatus : std::uint8_t { kUnreachable = 0, kUnstable = 1, kStable = 2 };
+/// kOverloaded: reachable and stable, but a joint's static torque (after the step or during it)
+/// exceeds StabilityMapOptions::max_saturation of its limit (§7.1).
+enum class CellStatus : std::uint8_t { kUnreachable = 0, kUnstable = 1, kStable = 2, kOverloaded = 3 };
 
 struct StabilityMapOptions {
   double cell = 0.02;         ///< map cell [m] (the paper's maps are DEM-resolution)
@@ -28,6 +38,14 @@ struct StabilityMapOptions {
   StabilityCriterion criterion = StabilityCriterion::kAuto;
   double slope_threshold = 0.0873;  ///< [rad] (5°)
   int ik_evaluations = 60;    ///< LM evaluations per IK start (each cell is seeded by a neighbour)
+  /// Evaluate every reachable cell's peak joint torque (§7.1): |tau| / limit over every joint of
+  /// every leg, the larger of the stance after the step and the stance with the swing leg at the
+  /// waypoint above the cell. Implied by a finite max_saturation.
+  bool torques = false;
+  /// A stable cell whose peak torque exceeds this fraction of a joint's limit is kOverloaded:
+  /// 1 refuses saturation, 0.8 keeps a 20 % torque margin; infinity (default) never. [0, inf]
+  double max_saturation = std::numeric_limits<double>::infinity();
+  bool evaluates_torques() const { return torques || max_saturation < std::numeric_limits<double>::infinity(); }
   void validate() const;
 };
 
@@ -39,6 +57,12 @@ struct CellEvaluation {
   Eigen::VectorXd q;            ///< the leg's joint angles on the ground point
   Eigen::VectorXd q_above;      ///< at the compliance waypoint above it
   Eigen::Vector3d cg = Eigen::Vector3d::Zero();  ///< new centre of gravity (world)
+  /// Peak |tau| / limit (NaN unless torques are evaluated and the cell is reachable): after the
+  /// step (every foot down), during it (the leg at q_above, five feet carrying), the larger.
+  double saturation_down = std::numeric_limits<double>::quiet_NaN();
+  double saturation_lifted = std::numeric_limits<double>::quiet_NaN();
+  double saturation = std::numeric_limits<double>::quiet_NaN();
+  int peak_leg = -1, peak_joint = -1;  ///< where the larger peak is
 };
 
 /// The map: cell (i, j) is centred at (origin_x + i cell, origin_y + j cell) in the world.
@@ -51,6 +75,12 @@ struct StabilityMap {
   Eigen::Vector3d hip = Eigen::Vector3d::Zero();  ///< hip (first joint) in the world
   double reach = 0.0;      ///< cells farther than this from the hip are not tried [m]
   long ik_solves = 0;      ///< local IK solves performed
+  /// Peak |tau| / limit per cell (CellEvaluation::saturation); NaN where unreachable or when
+  /// torques are not evaluated.
+  Eigen::MatrixXd saturation;
+  /// Peak |tau| / limit with the leg lifted to the waypoint above its current foot (the same for
+  /// every cell; NaN when torques are not evaluated).
+  double lift_saturation = std::numeric_limits<double>::quiet_NaN();
   int count(CellStatus s) const;
 };
 
@@ -91,6 +121,7 @@ class StabilityMapper {
   bool nesm_ = false, start_ok_ = false;
   Eigen::VectorXd q_start_above_;
   long solves_ = 0;
+  std::unique_ptr<StanceTorques> torques_;  // when options_.evaluates_torques()
 };
 
 }  // namespace ernest::footfall

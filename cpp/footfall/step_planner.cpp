@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "ernest/common/validation.hpp"
+#include "ernest/footfall/torque_smoothing.hpp"
 #include "ernest/walker/leg_ik.hpp"
 
 namespace ernest::footfall {
@@ -41,6 +42,11 @@ StepPlan plan_step(const walker::WalkerModel& model, const dynamics::HeightMap& 
   s.q_goal = goal.q;
   if (goal.status == CellStatus::kUnstable)
     return no_plan("goal unstable (CPS margin " + std::to_string(goal.margin) + " m)");
+  s.goal_saturation = goal.saturation;
+  if (goal.status == CellStatus::kOverloaded)  // §7.1: reachable and stable, beyond a torque limit
+    return no_plan("goal overloads leg " + std::to_string(goal.peak_leg) + " joint " + std::to_string(goal.peak_joint) +
+                   " (peak torque " + std::to_string(goal.saturation) + " of its limit, max_saturation " +
+                   std::to_string(options.map.max_saturation) + ")");
   // Sag with the leg in the air (§4.1, §5.1).
   s.sag = predict_swing_sag(model, body, q, leg, options.sag);
   if (s.sag.status != statics::SagStatus::Converged)
@@ -68,7 +74,15 @@ StepPlan plan_step(const walker::WalkerModel& model, const dynamics::HeightMap& 
   if (s.plan.status != PlanStatus::kSolved) return no_plan(s.plan.reason);
   SmoothingOptions smoothing = options.smoothing;
   smoothing.epsilon = options.planner.epsilon;
-  s.smoothing = smooth_path(checker, s.plan.path, smoothing);
+  if (smoothing.objective == SmoothingObjective::kPeakTorque || options.map.evaluates_torques()) {
+    StanceTorques torques(model, s.planning_body, q, leg);
+    s.smoothing = smoothing.objective == SmoothingObjective::kPeakTorque
+                      ? smooth_path_for_torque(checker, torques, s.plan.path, smoothing)
+                      : smooth_path(checker, s.plan.path, smoothing);
+    s.path_saturation = torques.lifted_path(s.smoothing.path, smoothing.torque_resolution).saturation;
+  } else {
+    s.smoothing = smooth_path(checker, s.plan.path, smoothing);
+  }
   const Eigen::Index m = s.smoothing.path.cols();
   s.path.resize(model.joints_per_leg(), m + 2);
   s.path.col(0) = s.q_start;

@@ -3,10 +3,13 @@
 // predicted with the leg in the air, the compliance waypoints directly above start and goal
 // placed over the real ground in that sagged pose (so the wheel breaks contact however far the
 // chassis droops), SBL between the waypoints against the sagged pose, and the plan smoothed.
+// Torque-aware (§7.1): with map.max_saturation finite a goal whose stance overloads a joint is
+// refused, and smoothing.objective = kPeakTorque smooths for the smallest peak joint torque.
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <limits>
 #include <string>
 
 #include "ernest/footfall/leg_collision.hpp"
@@ -36,6 +39,11 @@ struct StepPlan {
   Eigen::Isometry3d planning_body = Eigen::Isometry3d::Identity();  ///< pose planned against
   Eigen::Vector3d goal = Eigen::Vector3d::Zero();  ///< goal ground point (world)
   double goal_margin = 0.0;           ///< SSM/NESM of the CPS after the step [m]
+  /// Peak |tau| / limit of the goal's stances (CellEvaluation::saturation) and along the path
+  /// between the waypoints with the leg in the air; NaN unless torques are evaluated
+  /// (map.evaluates_torques() or the kPeakTorque smoother).
+  double goal_saturation = std::numeric_limits<double>::quiet_NaN();
+  double path_saturation = std::numeric_limits<double>::quiet_NaN();
   Eigen::VectorXd q_start, q_start_above, q_goal_above, q_goal;
   PlanResult plan;                    ///< SBL between the two waypoints
   SmoothingResult smoothing;          ///< of plan.path
@@ -44,7 +52,7 @@ struct StepPlan {
 
 /// Plans a step of `leg` from the stance (body pose, q joints × legs, every foot down) to the
 /// ground point below (goal_x, goal_y). Non-finite input throws std::invalid_argument; an
-/// unreachable or unstable goal, an unstable swing stance, a blocked compliance segment or no
+/// unreachable, unstable or overloaded goal, an unstable swing stance, a blocked compliance segment or no
 /// path within the budget give kNoPlan with the reason.
 StepPlan plan_step(const walker::WalkerModel& model, const dynamics::HeightMap& terrain,
                    const Eigen::Isometry3d& body, const Eigen::Ref<const Eigen::MatrixXd>& q, int leg,
