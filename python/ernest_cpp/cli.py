@@ -9,10 +9,11 @@ from . import (__version__, evaluate, perception_demo, reproduce, rover_statics,
                soil_curves, transitions, walker_demo, footfall_demo)
 from .rl import commands as rl_commands
 from .rl import pipeline as rl_pipeline
+from .viewer import command as view_command
 
 # Each module exposes add_parser(subparsers) and sets `func` on its parser.
 _COMMANDS = [soil_curves, evaluate, rl_commands, rl_pipeline, transitions, slope_demo, reproduce,
-             rover_statics, walker_demo, perception_demo, footfall_demo]
+             rover_statics, walker_demo, perception_demo, footfall_demo, view_command]
 
 DESCRIPTION = ("ERNEST rover simulation, training and evaluation: run `ernest COMMAND --help` "
                "for one command's options.")

@@ -96,11 +96,16 @@ def check_policy_sizes(module, meta: dict, path: str) -> None:
                          "observation")
 
 
-def run_episode(env_id: str, kwargs: dict, policy, passive: bool, seed: int):
+def run_episode(env_id: str, kwargs: dict, policy, passive: bool, seed: int,
+                record: str | None = None):
     """One episode of ``policy`` (its ``reset()`` called first, if it has one); returns
     (metrics, history, unwrapped env, last info). ``kwargs`` go to ``gym.make`` (e.g. ``soil``,
-    ``episode_length``)."""
+    ``episode_length``). ``record``: a file for the 3D viewer's recording (``ernest view``)."""
     env = gym.make(env_id, passive=passive, **kwargs)
+    if record:
+        from .viewer import RecordEpisode
+
+        env = RecordEpisode(env, record)
     if hasattr(policy, "reset"):
         policy.reset()
     obs, _ = env.reset(seed=seed)
@@ -232,6 +237,14 @@ def course_episode(env_id: str, kwargs: dict, name: str, policy_file: str | None
     return metrics, history, SimpleNamespace(scenario=scen), info, time.perf_counter() - t0
 
 
+def record_path(args: argparse.Namespace, label: str, controller: str) -> str | None:
+    """With ``--record``: OUT/recordings/<course>_<controller>.npz for ``ernest view``."""
+    if not getattr(args, "record", False):
+        return None
+    slug = "".join(c if c.isalnum() else "_" for c in f"{label}_{controller}".lower())
+    return os.path.join(args.out, "recordings", "_".join(filter(None, slug.split("_"))) + ".npz")
+
+
 def run(args: argparse.Namespace) -> int:
     os.makedirs(args.out, exist_ok=True)
     ctrls = controllers(args.policy)
@@ -250,6 +263,8 @@ def run(args: argparse.Namespace) -> int:
         remote = dict(zip(keys, fan_out(course_episode, jobs, args.ray_address)))
     elif getattr(args, "ray_address", None):
         raise ValueError("--ray-address needs --backend ray")
+    if getattr(args, "record", False) and remote is not None:
+        raise ValueError("--record runs the episodes here: use it without --backend ray")
     for c, (label, env_id, kwargs) in enumerate(runs):
         results[label] = {}
         for name, (policy, passive) in ctrls.items():
@@ -260,7 +275,7 @@ def run(args: argparse.Namespace) -> int:
                 t0 -= secs
             else:
                 metrics, history, env, info = run_episode(env_id, kwargs, policy, passive,
-                                                          args.seed)
+                                                          args.seed, record_path(args, label, name))
             results[label][name] = {"metrics": metrics, "history": history, "env": env}
             print(f"[{k:2d}/{total}] {label:24s} {name:16s} progress {metrics['progress']:5.2f} m "
                   f"travel reduction {100 * metrics['travel_reduction']:5.1f} % "
@@ -310,6 +325,8 @@ def add_parser(sub) -> None:
                    help="run only this scenario's courses (its short name, docs/envs.md; "
                    "repeatable; default: all evaluation courses)")
     p.add_argument("--no-video", action="store_true", help="skip the animation")
+    p.add_argument("--record", action="store_true",
+                   help="write each episode's 3D recording to OUT/recordings/ (ernest view FILE)")
     from .rl.commands import backend_args
 
     backend_args(p)  # --backend ray: the episodes as tasks on a Ray cluster

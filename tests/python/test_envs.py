@@ -192,7 +192,7 @@ def test_bad_arguments_raise_value_errors():
     with pytest.raises(ValueError, match="dry_sand, m90, wet_sand"):
         E.ErnestEnv("slope", soil="mud")
     with pytest.raises(ValueError, match="render_mode"):
-        E.ErnestEnv("slope", render_mode="human")
+        E.ErnestEnv("slope", render_mode="ansi")
     with pytest.raises(ValueError, match="randomisation"):
         E.ErnestEnv("slope", randomisation={"gravity": 1})
     with pytest.raises(ValueError, match="physics_dt"):

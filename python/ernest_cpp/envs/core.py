@@ -200,12 +200,12 @@ class ErnestEnv(gym.Env):
     and applied at the next ``reset()`` (the episode in progress keeps its configuration).
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
 
     def __init__(self, scenario: str = "rockfield", render_mode: str | None = None,
                  params: Any = None, _options: Any = None, **kwargs):
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode = {render_mode!r}; allowed: None, 'rgb_array'")
+        if render_mode not in (None, "rgb_array", "human"):
+            raise ValueError(f"render_mode = {render_mode!r}; allowed: None, 'rgb_array', 'human'")
         check_scenario(scenario)
         self.render_mode = render_mode
         self.scenario_name = scenario
@@ -258,6 +258,8 @@ class ErnestEnv(gym.Env):
             obs = self.core.reset_next()
         self._started = True
         self.history = [self._snapshot(None)]
+        if self.render_mode == "human":
+            self._live_view()
         return obs.astype(np.float32), {"episode_seed": self.core.episode_seed,
                                         "scenario": self.core.scenario.name}
 
@@ -283,6 +285,8 @@ class ErnestEnv(gym.Env):
             raise ValueError("action must be finite")
         obs, reward, terminated, truncated, info = self.core.step(a)
         self.history.append(self._snapshot(info))
+        if self.render_mode == "human":
+            self._live_view()
         if terminated or truncated:
             info["episode_metrics"] = self.core.metrics
         return obs.astype(np.float32), float(reward), bool(terminated), bool(truncated), info
@@ -295,7 +299,27 @@ class ErnestEnv(gym.Env):
                 "wheel_load": np.array(s.wheel_load), "energy": s.energy,
                 "action": np.array(self.core.current_action)}
 
+    def _live_view(self) -> None:
+        """render_mode "human": the state goes to the browser's live 3D view (ernest_cpp.viewer;
+        port ERNEST_VIEWER_PORT, default 8080); a slow or closed browser never delays the step."""
+        if getattr(self, "_viewer", None) is None:
+            import os
+
+            from ..viewer.app import LiveViewer
+
+            self._viewer = LiveViewer(port=int(os.environ.get("ERNEST_VIEWER_PORT", "8080")))
+        self._viewer.push(self)
+
+    def close(self):
+        viewer = getattr(self, "_viewer", None)
+        if viewer is not None:
+            viewer.close()
+            self._viewer = None
+        super().close()
+
     def render(self):
+        if self.render_mode == "human":  # each step already sent the state (Gymnasium's rule)
+            return None
         if self.render_mode != "rgb_array":
             return None
         from .render import render_frame
