@@ -19,6 +19,8 @@
 #include "ernest/footfall/stability_map.hpp"
 #include "ernest/footfall/step_planner.hpp"
 #include "ernest/footfall/swing_sag.hpp"
+#include "ernest/footfall/stance_torque.hpp"
+#include "ernest/footfall/torque_smoothing.hpp"
 
 namespace py = pybind11;
 using namespace pybind11::literals;
@@ -42,10 +44,13 @@ void bind_footfall(py::module_& m) {
       .value("Auto", StabilityCriterion::kAuto)
       .value("SSM", StabilityCriterion::kSsm)
       .value("NESM", StabilityCriterion::kNesm);
-  py::enum_<CellStatus>(m, "CellStatus", "Map cell: unreachable (0), unstable (1) or stable (2).")
+  py::enum_<CellStatus>(m, "CellStatus",
+                        "Map cell: unreachable (0), unstable (1), stable (2) or overloaded (3: reachable and "
+                        "stable, but a joint's static torque exceeds StabilityMapOptions.max_saturation, §7.1).")
       .value("Unreachable", CellStatus::kUnreachable)
       .value("Unstable", CellStatus::kUnstable)
-      .value("Stable", CellStatus::kStable);
+      .value("Stable", CellStatus::kStable)
+      .value("Overloaded", CellStatus::kOverloaded);
   py::enum_<PlannerType>(m, "PlannerType", "OMPL planner: SBL (FootFall's) or RRT-Connect (reference).")
       .value("SBL", PlannerType::kSbl)
       .value("RRTConnect", PlannerType::kRrtConnect);
@@ -72,6 +77,11 @@ void bind_footfall(py::module_& m) {
       .def_readwrite("criterion", &StabilityMapOptions::criterion)
       .def_readwrite("slope_threshold", &StabilityMapOptions::slope_threshold, "[rad] for Auto")
       .def_readwrite("ik_evaluations", &StabilityMapOptions::ik_evaluations)
+      .def_readwrite("torques", &StabilityMapOptions::torques,
+                     "evaluate each reachable cell's peak joint torque (after the step, and during it with the "
+                     "leg at the waypoint above the cell; §7.1)")
+      .def_readwrite("max_saturation", &StabilityMapOptions::max_saturation,
+                     "stable cells whose peak |tau| / limit exceeds this are Overloaded, [0, inf]; inf: never")
       .def("validate", &StabilityMapOptions::validate, "Raise ValueError naming the field.");
 
   py::class_<StabilityMap>(m, "StabilityMap", "Cell (i, j) at (origin_x + i cell, origin_y + j cell).")
@@ -85,6 +95,10 @@ void bind_footfall(py::module_& m) {
       .def_readonly("hip", &StabilityMap::hip)
       .def_readonly("reach", &StabilityMap::reach)
       .def_readonly("ik_solves", &StabilityMap::ik_solves)
+      .def_readonly("saturation", &StabilityMap::saturation,
+                    "peak |tau| / limit per cell (NaN where unreachable or torques are off)")
+      .def_readonly("lift_saturation", &StabilityMap::lift_saturation,
+                    "peak |tau| / limit with the leg lifted above its current foot (NaN when torques are off)")
       .def("count", &StabilityMap::count, "status"_a, "Cells with this status.");
 
   py::class_<CellEvaluation>(m, "CellEvaluation", "One evaluated ground point.")
@@ -92,7 +106,13 @@ void bind_footfall(py::module_& m) {
       .def_readonly("margin", &CellEvaluation::margin)
       .def_readonly("q", &CellEvaluation::q)
       .def_readonly("q_above", &CellEvaluation::q_above)
-      .def_readonly("cg", &CellEvaluation::cg);
+      .def_readonly("cg", &CellEvaluation::cg)
+      .def_readonly("saturation_down", &CellEvaluation::saturation_down, "peak |tau| / limit after the step")
+      .def_readonly("saturation_lifted", &CellEvaluation::saturation_lifted,
+                    "peak |tau| / limit with the leg at q_above")
+      .def_readonly("saturation", &CellEvaluation::saturation, "the larger (NaN when torques are off)")
+      .def_readonly("peak_leg", &CellEvaluation::peak_leg)
+      .def_readonly("peak_joint", &CellEvaluation::peak_joint);
 
   py::class_<StabilityMapper>(m, "StabilityMapper",
                               "Foot placements of one leg for a stance over a terrain (§3.3).")
@@ -170,8 +190,18 @@ void bind_footfall(py::module_& m) {
            "path"_a,
            py::call_guard<py::gil_scoped_release, interruptible>(), "OMPL's PathSimplifier.simplifyMax (reference).");
 
+  py::enum_<SmoothingObjective>(m, "SmoothingObjective",
+                                "Length: shortest joint-space path (§3.4.2); PeakTorque: smallest peak joint torque "
+                                "with the leg in the air, then length (§7.1).")
+      .value("Length", SmoothingObjective::kLength)
+      .value("PeakTorque", SmoothingObjective::kPeakTorque);
   py::class_<SmoothingOptions>(m, "SmoothingOptions", "Dijkstra–bisection smoothing (§3.4.2).")
       .def(py::init<>())
+      .def_readwrite("objective", &SmoothingOptions::objective, "SmoothingObjective (plan_step's smoother)")
+      .def_readwrite("torque_resolution", &SmoothingOptions::torque_resolution,
+                     "PeakTorque: edge samples every this [rad], [1e-3, 1]")
+      .def_readwrite("torque_tolerance", &SmoothingOptions::torque_tolerance,
+                     "PeakTorque: peaks closer than this tie (fraction of a limit), [0, 1]")
       .def_readwrite("epsilon", &SmoothingOptions::epsilon, "[rad]")
       .def_readwrite("min_improvement", &SmoothingOptions::min_improvement, "relative")
       .def_readwrite("max_iterations", &SmoothingOptions::max_iterations)
@@ -183,7 +213,40 @@ void bind_footfall(py::module_& m) {
       .def_readonly("length", &SmoothingResult::length)
       .def_readonly("iterations", &SmoothingResult::iterations)
       .def_readonly("edge_checks", &SmoothingResult::edge_checks)
-      .def_readonly("seconds", &SmoothingResult::seconds);
+      .def_readonly("seconds", &SmoothingResult::seconds)
+      .def_readonly("initial_peak_saturation", &SmoothingResult::initial_peak_saturation,
+                    "peak |tau| / limit along the input (NaN unless PeakTorque)")
+      .def_readonly("peak_saturation", &SmoothingResult::peak_saturation,
+                    "peak |tau| / limit along the result (NaN unless PeakTorque)");
+  py::class_<TorquePeak>(m, "TorquePeak", "Peak |tau| / limit over every joint of every leg, and where.")
+      .def_readonly("saturation", &TorquePeak::saturation, "1 = a joint at its torque limit")
+      .def_readonly("leg", &TorquePeak::leg)
+      .def_readonly("joint", &TorquePeak::joint);
+  py::class_<StanceTorques>(m, "StanceTorques",
+                            "Static joint torques of a stance as one leg steps (§7.1): zero-interaction loads "
+                            "(§5.1.1), tau = J^T f + g(q) (§5.3.2-5.3.3).")
+      .def(py::init([](const WalkerModel& model, const Eigen::Matrix4d& body, const Eigen::MatrixXd& q, int leg) {
+             return std::make_unique<StanceTorques>(model, body_pose(body), q, leg);
+           }),
+           "model"_a, "body"_a, "q"_a, "leg"_a, py::keep_alive<1, 2>())
+      .def("down", guarded("StanceTorques.down", &StanceTorques::down), "q_leg"_a,
+           "Every foot down, the swing wheel on q_leg's contact (after the step).")
+      .def("lifted", guarded("StanceTorques.lifted", &StanceTorques::lifted), "q_leg"_a,
+           "The swing leg in the air at q_leg, the other feet carry the robot.")
+      .def("lifted_segment", guarded("StanceTorques.lifted_segment", &StanceTorques::lifted_segment), "a"_a, "b"_a,
+           "resolution"_a = 0.05, "Peak of lifted() along a -> b, sampled every resolution [rad].")
+      .def("lifted_path", guarded("StanceTorques.lifted_path", &StanceTorques::lifted_path), "path"_a,
+           "resolution"_a = 0.05, "Peak of lifted() along a (joints, waypoints) path.")
+      .def_property_readonly("leg", &StanceTorques::leg);
+  m.def("smooth_path_for_torque",
+        [](LegCollisionChecker& checker, StanceTorques& torques, const Eigen::Ref<const Eigen::MatrixXd>& path,
+           const SmoothingOptions& options) {
+          const Busy busy("smooth_path_for_torque", {&checker, &torques});
+          return smooth_path_for_torque(checker, torques, path, options);
+        },
+        "checker"_a, "torques"_a, "path"_a, "options"_a = SmoothingOptions{},
+        py::call_guard<py::gil_scoped_release, interruptible>(),
+        "Dijkstra-bisection smoothing for the smallest peak joint torque, then length (§7.1, §3.4.2).");
   m.def("smooth_path",
         [](LegCollisionChecker& checker, const Eigen::Ref<const Eigen::MatrixXd>& path,
            const SmoothingOptions& options) {
@@ -234,6 +297,10 @@ void bind_footfall(py::module_& m) {
       .def_property_readonly("planning_body", [](const StepPlan& s) { return matrix(s.planning_body); })
       .def_readonly("goal", &StepPlan::goal)
       .def_readonly("goal_margin", &StepPlan::goal_margin)
+      .def_readonly("goal_saturation", &StepPlan::goal_saturation,
+                    "peak |tau| / limit of the goal's stances (NaN when torques are off)")
+      .def_readonly("path_saturation", &StepPlan::path_saturation,
+                    "peak |tau| / limit along the path with the leg in the air (NaN when torques are off)")
       .def_readonly("q_start", &StepPlan::q_start)
       .def_readonly("q_start_above", &StepPlan::q_start_above)
       .def_readonly("q_goal_above", &StepPlan::q_goal_above)

@@ -211,6 +211,9 @@ void bind_walker_sim(py::module_& m) {
       .def_readwrite("max_candidates", &FootfallCycleOptions::max_candidates, "footholds tried per step")
       .def_readwrite("candidate_spacing", &FootfallCycleOptions::candidate_spacing, "between candidates [m]")
       .def_readwrite("settle_time", &FootfallCycleOptions::settle_time, "[s]")
+      .def_readwrite("torque_preference", &FootfallCycleOptions::torque_preference,
+                     "candidates by distance + this x peak torque fraction [m], [0, 100] (§7.1)")
+      .def_readwrite("execute", &FootfallCycleOptions::execute, "False: plan only (no simulator)")
       .def_readwrite("steps", &FootfallCycleOptions::steps, "first steps of the cycle to take (0: all)")
       .def_readwrite("step", &FootfallCycleOptions::step, "footfall.StepOptions")
       .def_readwrite("sim", &FootfallCycleOptions::sim)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "ernest/common/validation.hpp"
@@ -35,11 +36,16 @@ bool flat_around(const dynamics::HeightMap& t, double x, double y, double radius
 std::vector<Eigen::Vector2d> foothold_candidates(const footfall::StabilityMap& m, const dynamics::HeightMap& t,
                                                  const Eigen::Vector2d& nominal, const FootfallCycleOptions& o) {
   std::vector<std::pair<double, Eigen::Vector2d>> stable;
+  const bool by_torque = o.torque_preference > 0.0 && m.saturation.size() == m.status.size();
   for (Eigen::Index i = 0; i < m.status.rows(); ++i)
     for (Eigen::Index j = 0; j < m.status.cols(); ++j)
       if (m.status(i, j) == static_cast<std::uint8_t>(footfall::CellStatus::kStable)) {
         const Eigen::Vector2d p(m.origin_x + i * m.cell, m.origin_y + j * m.cell);
-        stable.emplace_back((p - nominal).squaredNorm(), p);
+        // §7.1: prefer cells by torque margin when asked (overloaded cells are never candidates).
+        if (by_torque && std::isfinite(m.saturation(i, j)))
+          stable.emplace_back((p - nominal).norm() + o.torque_preference * m.saturation(i, j), p);
+        else
+          stable.emplace_back((p - nominal).squaredNorm(), p);
       }
   std::sort(stable.begin(), stable.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Eigen::Vector2d> out;
@@ -80,6 +86,7 @@ void FootfallCycleOptions::validate(int joints) const {
   require_in_range(o, "max_candidates", max_candidates, 1, 10000);
   require_in_range(o, "candidate_spacing", candidate_spacing, 0.0, 2.0);
   require_in_range(o, "settle_time", settle_time, 0.0, 60.0);
+  require_in_range(o, "torque_preference", torque_preference, 0.0, 100.0);
   require_in_range(o, "steps", steps, 0, 1000);
   step.validate(joints);
   sim.validate();
@@ -96,7 +103,10 @@ FootfallCycleResult run_footfall_cycle(const walker::WalkerModel& model, const d
   const Eigen::Matrix3Xd feet0 = feet;
   const Eigen::Vector3d dir(std::cos(o.heading), std::sin(o.heading), 0.0);
   WalkerSim sim(model, body, q, rocks, o.sim);
-  sim.hold(q, o.settle_time);
+  if (o.execute) sim.hold(q, o.settle_time);
+  ExecutionTrace unexecuted;  // the traces of a planned-only cycle: nothing measured
+  unexecuted.min_rock_clearance = unexecuted.min_any_rock_clearance = unexecuted.min_ground_clearance =
+      std::numeric_limits<double>::quiet_NaN();
   out.body_start = sim.body_pose().translation();
   out.min_rock_clearance = kInf;
   const double sim_start = sim.time();
@@ -149,7 +159,7 @@ FootfallCycleResult run_footfall_cycle(const walker::WalkerModel& model, const d
       }
     r.planned_wheel.rightCols<1>() = (r.plan.planning_body * model.foot_pose(leg, path.back())).translation();
     const auto t1 = Clock::now();
-    const ExecutionTrace swing = execute_joint_path(sim, leg, q, path, o.execution);
+    const ExecutionTrace swing = !o.execute ? unexecuted : execute_joint_path(sim, leg, q, path, o.execution);
     keep_frames(swing);
     r.executed_wheel = swing.wheel_path;
     r.swing_rock_clearance = swing.min_rock_clearance;
@@ -161,7 +171,7 @@ FootfallCycleResult run_footfall_cycle(const walker::WalkerModel& model, const d
     Eigen::Isometry3d next = body;
     next.translation() += (o.stride / model.legs()) * dir;
     const Eigen::MatrixXd q_next = stance_for(model, terrain, next, q, feet, o.step.map);
-    const ExecutionTrace shift = execute_configuration_path(sim, -1, {q, q_next}, o.execution);
+    const ExecutionTrace shift = !o.execute ? unexecuted : execute_configuration_path(sim, -1, {q, q_next}, o.execution);
     keep_frames(shift);
     sim_wall += since(t1);
     r.min_rock_clearance = std::min(r.min_rock_clearance, shift.min_any_rock_clearance);

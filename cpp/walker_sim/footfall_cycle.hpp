@@ -31,6 +31,13 @@ struct FootfallCycleOptions {
   /// Candidates at least this far apart [m], [0, 2]: neighbouring cells fail for the same reason.
   double candidate_spacing = 0.06;
   double settle_time = 1.0;       ///< settling on six wheels before the cycle [s], [0, 60]
+  /// Torque-aware foothold choice (seed 003 §7.1): candidates ordered by their distance to the
+  /// nominal foothold plus this × the cell's peak joint torque (fraction of its limit) [m], [0, 100];
+  /// 0 orders by distance alone. Needs the map's torques (step.map.torques or max_saturation).
+  double torque_preference = 0.0;
+  /// false: plan the cycle without executing it (no simulator; executed fields are NaN, the
+  /// cycle's min_rock_clearance infinite).
+  bool execute = true;
   int steps = 0;                  ///< steps to take, the first ones of the cycle (0: every leg), [0, legs]
   footfall::StepOptions step;     ///< stability map, SBL, smoothing, sag model, sag_compensation
   WalkerSimOptions sim;
