@@ -135,8 +135,10 @@ class RoverScene:
                 h.position = tuple(float(v) for v in p)
                 h.wxyz = tuple(float(v) for v in q)
             self.arrows.points, self.arrows.colors = self._load_arrows(frame)
-            if track is not None and len(track) > 1:
-                t = np.asarray(track, dtype=np.float32)
+            if track is not None:
+                t = np.asarray(track, dtype=np.float32).reshape(-1, 3)
+                if len(t) == 1:  # the first frame: nothing travelled yet
+                    t = np.concatenate([t, t])
                 self.trail.points = np.stack([t[:-1], t[1:]], axis=1)
 
     def _load_arrows(self, frame: dict):
