@@ -77,6 +77,9 @@ def screenshot(url: str, path: str, size: tuple[int, int] = (1280, 800),
     driver = start_browser(size)
     try:
         driver.get(url)
+        wait_for_scene(driver, timeout)
+        if dismiss_notices(driver):  # e.g. "software WebGL": not part of the view
+            time.sleep(0.5)
         img = wait_for_scene(driver, timeout)
     finally:
         driver.quit()

@@ -65,6 +65,9 @@ def elevation_colours(z: np.ndarray) -> np.ndarray:
     (an earthy ramp with enough contrast to read steps and ripples)."""
     stops = np.array([[60, 80, 115], [125, 115, 90], [185, 150, 100], [225, 205, 165]], float)
     lo, hi = (float(v) for v in np.percentile(z, [2.0, 98.0]))  # a few peaks do not wash it out
+    if hi - lo < 0.2:  # flat ground (a step's course): sand, not the ramp's ends
+        mid = 0.5 * (lo + hi)
+        lo, hi = mid - 0.1, mid + 0.1
     z = np.asarray(z, dtype=np.float64)
     u = np.clip((z - lo) / (hi - lo), 0.0, 1.0) if hi > lo else np.zeros_like(z)
     x = u * (len(stops) - 1)
