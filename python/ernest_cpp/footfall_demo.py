@@ -29,13 +29,15 @@ STEREO_FLAT_TOLERANCE = 0.05
 
 
 def run(out: Path, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants: bool = True, log=print,
-        terrain=None, terrain_source: str = "truth") -> dict:
+        terrain=None, terrain_source: str = "truth", record: bool = False) -> dict:
     """The executed gait cycle around rocks (``footfall_cycle``), the skeleton gait and the Moses
     Lake scenario (``footfall_gait``) and self-imaging (``perception_selfimage``). ``terrain``: the
     planner's HeightMap (default: the rocks rasterised, or with ``terrain_source="stereo"`` the
     stereo-fused map of them seen from the start pose, ``footfall_terrain``); ``variants``: also
     run the cycle with sag compensation off and at a quarter of the physics step. The simulator
-    always collides with the rocks themselves."""
+    always collides with the rocks themselves. ``record``: also write the executed cycle as a 3D
+    recording, ``out/footfall_cycle.npz`` (``ernest view``: legs, support polygon, each step's
+    stability map and planned leg path)."""
     if terrain_source not in footfall_terrain.SOURCES:
         raise ValueError(f"terrain_source must be one of {footfall_terrain.SOURCES}, got {terrain_source!r}")
     out.mkdir(parents=True, exist_ok=True)
@@ -57,6 +59,8 @@ def run(out: Path, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants:
     cycle = footfall_cycle.demo(out, seed=seed, cell=cell, rocks=rocks, variants=variants, log=log, terrain=terrain,
                                 flat_tolerance=flat_tolerance)
     r, model, planner_terrain = cycle.pop("_result"), cycle.pop("_model"), cycle.pop("_terrain")
+    if record:
+        _record(out, model, r, planner_terrain, seed, rocks, log)
     for k, s in enumerate(r.steps):
         if s.plan.solved:
             F.plot_leg_path(model, planner_terrain, s.plan, s.leg, out / f"step{k + 1}_leg{s.leg}_path.png",
@@ -83,6 +87,20 @@ def run(out: Path, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants:
     (out / "footfall.json").write_text(json.dumps(result, indent=2))
     _report(out, result)
     return result
+
+
+def _record(out: Path, model, r, terrain, seed: int, rocks: int, log) -> None:
+    from . import footfall_cycle
+    from .viewer import save_recording
+    from .viewer.walker import cycle_recording
+
+    if not len(r.frame_time):
+        log("[footfall] no 3D recording: the cycle stopped before its first step")
+        return
+    boxes, _, _ = footfall_cycle.rock_world(model, seed=seed, rocks=rocks)  # the cycle's rocks
+    path = save_recording(cycle_recording(model, r, boxes, terrain, seed=seed),
+                          str(out / "footfall_cycle.npz"))
+    log(f"[footfall] 3D recording of the executed cycle -> {path} (ernest view {path})")
 
 
 def _report(out: Path, r: dict) -> None:
@@ -167,11 +185,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="planner's DEM: the simulator's ground truth or the stereo-fused map")
     p.add_argument("--no-variants", dest="variants", action="store_false",
                    help="skip the cycle without sag compensation and the one at a quarter of the physics step")
+    p.add_argument("--record", action="store_true",
+                   help="also write the executed cycle as a 3D recording, OUT/footfall_cycle.npz (ernest view)")
     p.set_defaults(func=_main)
 
 
 def _main(args: argparse.Namespace) -> int:
-    r = run(args.out, args.seed, args.cell, args.rocks, args.variants, terrain_source=args.terrain)
+    r = run(args.out, args.seed, args.cell, args.rocks, args.variants, terrain_source=args.terrain,
+            record=args.record)
     c = r["cycle"]["compensated"]
     gif = "footfall_cycle.gif and " if r["cycle"]["gif_frames"] else ""
     print(f"wrote {args.out}/footfall_report.md, footfall.json, {gif}"

@@ -220,3 +220,43 @@ def test_recorder_refuses_other_envs_and_bad_paths():
         RecordEpisode(env, "")
     with pytest.raises(ValueError, match="policy"):
         record_episode(env, "not callable", "x.npz")
+
+
+def test_walker_cycle_recording(tmp_path):
+    """A FootFall gait cycle executed in ODE as a recording: each frame's legs are the model's
+    link capsules at that frame, three or more feet always on the ground, the steps in order, the
+    stability map cells and planned leg paths of every step kept; the player shows it."""
+    from ernest_cpp import footfall_cycle as FC
+    from ernest_cpp import walker as W
+    from ernest_cpp.viewer import Player, save_recording
+    from ernest_cpp.viewer.walker import cycle_recording, convex_hull
+
+    model = W.WalkerModel(W.sdm_b_parameters())
+    boxes, terrain, _ = FC.rock_world(model, seed=3, rocks=60)
+    r = FC.run(model, terrain, boxes, FC.cycle_options(frame_interval=0.5))
+    path = save_recording(cycle_recording(model, r, boxes, terrain, seed=3),
+                          str(tmp_path / "walker.npz"))
+    rec = load_recording(path)
+    assert rec.kind == "walker" and len(rec) == len(r.frame_time) > 10
+    k = len(rec) // 2
+    caps = model.capsules(np.asarray(r.frame_body[k]), np.asarray(r.frame_q[k]))
+    assert np.allclose(rec.frames["links"][k], [[c.p0, c.p1] for c in caps], atol=1e-5)
+    stance = rec.frames["stance"].sum(axis=1)
+    assert stance.min() >= 3 and stance.max() == model.legs
+    assert np.all(np.diff(rec.frames["step"]) >= 0) and rec.frames["step"][-1] == len(r.steps) - 1
+    cells = rec.static["cells"]
+    assert set(np.unique(cells[:, 0]).astype(int)) == set(range(len(r.steps)))
+    assert set(np.unique(cells[:, 3]).astype(int)) <= {1, 2}
+    assert rec.static["paths"].shape[1] == 4 and len(rec.static["paths"]) > 0
+    assert rec.obstacles.shape == (len(boxes), 9)
+    assert sorted(convex_hull(np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0.5]]))) == [0, 1, 2, 3]
+    with Player(path, port=0) as player:
+        player.set_time(rec.frames["time"][-1])
+        assert player.frame == len(rec) - 1
+        player.scene.checkboxes["stability map"].value = False
+
+
+def test_footfall_takes_record():
+    parser, sub = cli.build_parser()
+    args = parser.parse_args(["footfall", "--record"])
+    assert args.record is True

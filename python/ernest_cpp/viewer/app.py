@@ -50,6 +50,13 @@ def default_camera(rec_or_start, heading: float):
     return eye, target
 
 
+def walker_camera(body):
+    """(eye, look_at) of the fixed camera on the walker: behind, left and above its body."""
+    b = np.asarray(body, dtype=float)
+    p = b[:3, 3]
+    return p + np.array([-4.5, 3.5, 3.5]), p + np.array([0.3, 0.0, -0.8])
+
+
 class Player:
     """Serves one recording: the scene, a time slider (with play), layer switches and time series.
 
@@ -66,13 +73,21 @@ class Player:
         self.url = f"http://{'localhost' if host in ('0.0.0.0', '127.0.0.1') else host}:" \
                    f"{self.server.get_port()}"
         f = rec.frames
-        geometry = rec.meta.get("geometry") or {}
-        for key in ("wheelbase", "track", "wheel_radius", "wheel_width", "gimbal_point"):
-            if key not in geometry:
-                raise ValueError(f"recording: metadata lacks the rover geometry ({key!r})")
-        self.scene = RoverScene(self.server, geometry)
-        self.scene.set_terrain(rec.heights, rec.spacing, rec.origin, rec.obstacles, rec.path)
-        eye, target = default_camera(f["position"][0], rec.path[2])
+        if rec.kind == "walker":
+            from .walker import WalkerScene
+
+            self.scene = WalkerScene(self.server, rec)
+            self._track = f["body"][:, :3, 3]
+            eye, target = walker_camera(f["body"][0])
+        else:
+            geometry = rec.meta.get("geometry") or {}
+            for key in ("wheelbase", "track", "wheel_radius", "wheel_width", "gimbal_point"):
+                if key not in geometry:
+                    raise ValueError(f"recording: metadata lacks the rover geometry ({key!r})")
+            self.scene = RoverScene(self.server, geometry)
+            self.scene.set_terrain(rec.heights, rec.spacing, rec.origin, rec.obstacles, rec.path)
+            self._track = f["position"]
+            eye, target = default_camera(f["position"][0], rec.path[2])
         cam = self.server.initial_camera
         cam.position, cam.look_at, cam.up = tuple(eye), tuple(target), (0.0, 0.0, 1.0)
         cam.fov = CAMERA_FOV
@@ -89,7 +104,12 @@ class Player:
             self.speed = gui.add_slider("speed [x]", 0.25, 8.0, 0.25, 1.0)
             self.info = gui.add_markdown(self._caption(0))
         self.scene.add_layer_switches(gui)
-        self.plots = TimePlots(gui, f)
+        if rec.kind == "walker":
+            from .walker import WalkerPlots
+
+            self.plots = WalkerPlots(gui, f)
+        else:
+            self.plots = TimePlots(gui, f)
         self.frame = -1
         self.slider.on_update(lambda _ev: self._show(self.recording.frame_at(self.slider.value)))
         self._show(0)
@@ -111,7 +131,7 @@ class Player:
                 return
             f = self.recording.frames
             frame = {k: v[i] for k, v in f.items()}
-            self.scene.show(frame, f["position"][: i + 1])
+            self.scene.show(frame, self._track[: i + 1])
             self.plots.show(i + 1)
             self.info.content = self._caption(i)
             self.frame = i

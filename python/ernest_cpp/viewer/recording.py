@@ -34,6 +34,18 @@ FRAME_FIELDS = {
     "energy": ((), "J"),
 }
 
+#: the walker's per-frame arrays (``viewer.walker``): None is a size fixed by the model
+WALKER_FIELDS = {
+    "time": ((), "s"),
+    "links": ((None, 2, 3), "m"),  # each link capsule's end points
+    "body": ((4, 4), "m"),  # body pose (homogeneous)
+    "feet": ((None, 3), "m"),  # each leg's wheel contact point
+    "stance": ((None,), "-"),  # 1 where the foot bears load (on the ground)
+    "step": ((), "-"),  # the gait step the frame belongs to (index into the planned steps)
+}
+
+KINDS = {"rover": FRAME_FIELDS, "walker": WALKER_FIELDS}
+
 
 @dataclass
 class Recording:
@@ -46,6 +58,11 @@ class Recording:
     obstacles: np.ndarray  # (n, 9): cx, cy, cz, lx, ly, lz, yaw, pitch, roll
     path: tuple[float, float, float]  # x0, y0, heading of the desired path line
     frames: dict[str, np.ndarray] = field(default_factory=dict)
+    static: dict[str, np.ndarray] = field(default_factory=dict)  # kind-specific scene arrays
+
+    @property
+    def kind(self) -> str:
+        return str(self.meta.get("kind", "rover"))
 
     def __len__(self) -> int:
         return int(self.frames["time"].shape[0])
@@ -140,12 +157,13 @@ def save_recording(rec: Recording, path: str) -> str:
         os.makedirs(folder, exist_ok=True)
     meta = dict(rec.meta, format=FORMAT, version=VERSION, spacing=rec.spacing,
                 origin=list(rec.origin), path=list(rec.path),
-                units={k: u for k, (_, u) in FRAME_FIELDS.items()})
+                units={k: u for k, (_, u) in KINDS[rec.kind].items()})
     tmp = path + ".tmp"
     with open(tmp, "wb") as fh:
         np.savez(fh, meta=np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8),
                  heights=rec.heights.astype(np.float32), obstacles=rec.obstacles.astype(np.float32),
-                 **{f"frame_{k}": v for k, v in rec.frames.items()})
+                 **{f"frame_{k}": v for k, v in rec.frames.items()},
+                 **{f"static_{k}": v for k, v in rec.static.items()})
     os.replace(tmp, path)
     return path
 
@@ -180,15 +198,21 @@ def load_recording(path) -> Recording:
     if meta.get("version") != VERSION:
         raise ValueError(f"{path}: recording version {meta.get('version')!r}; this viewer reads "
                          f"version {VERSION}")
+    kind = meta.get("kind", "rover")
+    if kind not in KINDS:
+        raise ValueError(f"{path}: recording of kind {kind!r}; this viewer shows {', '.join(KINDS)}")
     frames = {}
     n = None
-    for name, (shape, _) in FRAME_FIELDS.items():
+    for name, (shape, _) in KINDS[kind].items():
         arr = data.get(f"frame_{name}")
         if arr is None:
             raise ValueError(f"{path}: recording has no '{name}' frames (file incomplete)")
-        if arr.shape[1:] != shape or (n is not None and arr.shape[0] != n):
+        if arr.ndim != len(shape) + 1 or any(want is not None and got != want
+                                             for got, want in zip(arr.shape[1:], shape)) \
+                or (n is not None and arr.shape[0] != n):
             raise ValueError(f"{path}: '{name}' frames have shape {arr.shape}, expected "
-                             f"({n if n is not None else 'n'}, {', '.join(map(str, shape))})")
+                             f"({n if n is not None else 'n'}, "
+                             f"{', '.join('m' if v is None else str(v) for v in shape)})")
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"{path}: '{name}' frames hold non-finite values")
         n = arr.shape[0]
@@ -209,8 +233,9 @@ def load_recording(path) -> Recording:
         raise ValueError(f"{path}: recording metadata lacks spacing, origin or path") from None
     if not spacing > 0:
         raise ValueError(f"{path}: height map spacing {spacing} must be > 0")
+    static = {k[len("static_"):]: v for k, v in data.items() if k.startswith("static_")}
     return Recording(meta=meta, heights=heights, spacing=spacing, origin=origin,
-                     obstacles=obstacles, path=line, frames=frames)
+                     obstacles=obstacles, path=line, frames=frames, static=static)
 
 
 class RecordEpisode(gym.Wrapper):

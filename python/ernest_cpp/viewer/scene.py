@@ -36,6 +36,29 @@ def _series(label, stroke=None, **kw):
     return U.Series(label=label, stroke=stroke, width=1.5, **kw) if stroke else U.Series(label=label)
 
 
+def add_terrain(server, heights, spacing, origin, obstacles, path=None, max_cells: int = 200):
+    """The height map coloured by elevation under /terrain, the boxes under /obstacles and, given
+    ``path`` (x0, y0, heading), the desired path under /path; returns their handles."""
+    import trimesh
+
+    verts, faces, colours = G.terrain_mesh(heights, spacing, origin, max_cells)
+    # glTF vertex colours are linear: convert the sRGB ramp so the browser shows it as meant
+    linear = (255.0 * (colours / 255.0) ** 2.2).round().astype(np.uint8)
+    mesh = trimesh.Trimesh(vertices=verts, faces=faces, vertex_colors=linear, process=False)
+    handles = [server.scene.add_mesh_trimesh("/terrain/map", mesh, **NO_SHADOW)]
+    for k, o in enumerate(np.asarray(obstacles).reshape(-1, 9)):
+        cx, cy, cz, lx, ly, lz, yaw, pitch, roll = (float(v) for v in o)
+        handles.append(server.scene.add_box(f"/obstacles/box{k}", color=ROCK_RGB,
+                                            dimensions=(lx, ly, lz), position=(cx, cy, cz),
+                                            wxyz=G.quat_zyx(yaw, pitch, roll), **NO_SHADOW))
+    pts = G.path_points(path, heights, spacing, origin) if path is not None else []
+    if len(pts) > 1:
+        seg = np.stack([pts[:-1], pts[1:]], axis=1).astype(np.float32)
+        handles.append(server.scene.add_line_segments("/path/line", seg, colors=PATH_RGB,
+                                                      thickness=3.0, thickness_units="screen"))
+    return handles
+
+
 class RoverScene:
     """Builds the scene of one episode on a viser server and poses it frame by frame."""
 
@@ -60,29 +83,10 @@ class RoverScene:
 
     # --- static parts -------------------------------------------------------------------
     def set_terrain(self, heights, spacing, origin, obstacles, path) -> None:
-        import trimesh
-
         for h in self._static:  # a new episode replaces the last one's terrain
             h.remove()
-        self._static = []
-        verts, faces, colours = G.terrain_mesh(heights, spacing, origin, self.max_cells)
-        # glTF vertex colours are linear: convert the sRGB ramp so the browser shows it as meant
-        linear = (255.0 * (colours / 255.0) ** 2.2).round().astype(np.uint8)
-        mesh = trimesh.Trimesh(vertices=verts, faces=faces, vertex_colors=linear, process=False)
-        add = self._static.append
-        add(self.server.scene.add_mesh_trimesh("/terrain/map", mesh, cast_shadow=False,
-                                                   receive_shadow=False))
-        for k, o in enumerate(np.asarray(obstacles).reshape(-1, 9)):
-            cx, cy, cz, lx, ly, lz, yaw, pitch, roll = (float(v) for v in o)
-            add(self.server.scene.add_box(f"/obstacles/box{k}", color=ROCK_RGB,
-                                      dimensions=(lx, ly, lz), position=(cx, cy, cz),
-                                          wxyz=G.quat_zyx(yaw, pitch, roll), **NO_SHADOW))
-        pts = G.path_points(path, heights, spacing, origin)
-        if len(pts) > 1:
-            seg = np.stack([pts[:-1], pts[1:]], axis=1).astype(np.float32)
-            add(self.server.scene.add_line_segments("/path/line", seg, colors=PATH_RGB,
-                                                    thickness=3.0,
-                                                    thickness_units="screen"))
+        self._static = add_terrain(self.server, heights, spacing, origin, obstacles, path,
+                                   self.max_cells)
 
     def _build_rover(self) -> None:
         g = self.geometry
