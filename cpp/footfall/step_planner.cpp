@@ -80,6 +80,10 @@ StepPlan plan_step(const walker::WalkerModel& model, const dynamics::HeightMap& 
                       ? smooth_path_for_torque(checker, torques, s.plan.path, smoothing)
                       : smooth_path(checker, s.plan.path, smoothing);
     s.path_saturation = torques.lifted_path(s.smoothing.path, smoothing.torque_resolution).saturation;
+    if (s.path_saturation > options.map.max_saturation)  // §7.1: the swing itself overloads a joint
+      return no_plan("the swing overloads a joint (peak torque " + std::to_string(s.path_saturation) +
+                     " of its limit with the leg in the air, max_saturation " +
+                     std::to_string(options.map.max_saturation) + ")");
   } else {
     s.smoothing = smooth_path(checker, s.plan.path, smoothing);
   }

@@ -4,7 +4,8 @@
 // placed over the real ground in that sagged pose (so the wheel breaks contact however far the
 // chassis droops), SBL between the waypoints against the sagged pose, and the plan smoothed.
 // Torque-aware (§7.1): with map.max_saturation finite a goal whose stance overloads a joint is
-// refused, and smoothing.objective = kPeakTorque smooths for the smallest peak joint torque.
+// refused, so is a swing whose path (the leg in the air) exceeds it, and smoothing.objective =
+// kPeakTorque smooths for the smallest peak joint torque.
 #pragma once
 
 #include <Eigen/Core>
