@@ -50,6 +50,13 @@ def default_camera(rec_or_start, heading: float):
     return eye, target
 
 
+def follow(server, eye, target) -> None:
+    """Move every connected browser's camera to ``eye`` looking at ``target``."""
+    for client in server.get_clients().values():
+        client.camera.position = tuple(float(v) for v in eye)
+        client.camera.look_at = tuple(float(v) for v in target)
+
+
 def walker_camera(body):
     """(eye, look_at) of the fixed camera on the walker: behind, left and above its body."""
     b = np.asarray(body, dtype=float)
@@ -101,6 +108,7 @@ class Player:
                                          round(float(max(t[-1], t[0] + dt)), 6), round(dt, 6),
                                          round(float(t[0]), 6))
             self.play = gui.add_checkbox("play", False)
+            self.follow = gui.add_checkbox("follow", False, hint="the camera follows the rover")
             self.speed = gui.add_slider("speed [x]", 0.25, 8.0, 0.25, 1.0)
             self.info = gui.add_markdown(self._caption(0))
         self.scene.add_layer_switches(gui)
@@ -132,9 +140,16 @@ class Player:
             f = self.recording.frames
             frame = {k: v[i] for k, v in f.items()}
             self.scene.show(frame, self._track[: i + 1])
+            if self.follow.value:
+                follow(self.server, *self._camera_at(frame))
             self.plots.show(i + 1)
             self.info.content = self._caption(i)
             self.frame = i
+
+    def _camera_at(self, frame: dict):
+        if self.recording.kind == "walker":
+            return walker_camera(frame["body"])
+        return default_camera(frame["position"], self.recording.path[2])
 
     def set_time(self, t: float) -> int:
         """Move the slider to ``t`` [s] (clamped); returns the frame shown."""
@@ -250,7 +265,10 @@ class LiveViewer:
         if static is not None:
             if self.scene is None:
                 self.scene = RoverScene(self.server, static.meta["geometry"])
+                self.follow = self.server.gui.add_checkbox(
+                    "follow", True, hint="the camera follows the rover")
                 self.scene.add_layer_switches(self.server.gui)
+            self._heading = static.path[2]
             self.scene.set_terrain(static.heights, static.spacing, static.origin,
                                    static.obstacles, static.path)
             eye, target = default_camera(row["position"], static.path[2])
@@ -266,6 +284,8 @@ class LiveViewer:
         self.plots.frames = frames
         self.plots.show(len(self._rows))
         self.scene.show(row, frames["position"])
+        if self.follow.value:
+            follow(self.server, *default_camera(row["position"], self._heading))
 
     def close(self) -> None:
         self._stop.set()
