@@ -141,7 +141,8 @@ void bind_footfall(py::module_& m) {
       .def("valid", guarded("LegCollisionChecker.valid", &LegCollisionChecker::valid), "q_leg"_a, "include_wheel"_a = true,
            "Limits, self-collisions and the terrain (without the wheel when include_wheel is False).")
       .def("motion_valid", guarded("LegCollisionChecker.motion_valid", &LegCollisionChecker::motion_valid), "a"_a, "b"_a, "epsilon"_a, "include_wheel"_a = true,
-           "Straight edge a -> b by recursive bisection to epsilon [rad].")
+           py::call_guard<py::gil_scoped_release, interruptible>(),
+           "Straight edge a -> b by recursive bisection to epsilon [rad] (at least 1e-5).")
       .def("checks", &LegCollisionChecker::checks, "Configurations checked so far.");
   m.def("first_colliding_edge",
         [](LegCollisionChecker& checker, const Eigen::Ref<const Eigen::MatrixXd>& path, double resolution,
@@ -151,7 +152,8 @@ void bind_footfall(py::module_& m) {
         },
         "checker"_a, "path"_a, "resolution"_a,
         "wheel_free_edges"_a = 0, py::call_guard<py::gil_scoped_release, interruptible>(),
-        "Dense re-check of a path: index of the first colliding edge, or -1.");
+        "Dense re-check of a path every `resolution` [rad] (at least 1e-5): index of the first "
+        "colliding edge, or -1.");
 
   py::class_<PlannerOptions>(m, "PlannerOptions", "Single-leg planner options (§3.4.1).")
       .def(py::init<>())

@@ -137,8 +137,9 @@ void bind_perception(py::module_& m) {
   py::class_<StereoMatcher>(m, "StereoMatcher", "OpenCV stereo matcher (StereoBM by default).")
       .def(py::init<const StereoMatcherOptions&>(), "options"_a = StereoMatcherOptions{})
       .def("compute", guarded("StereoMatcher.compute", &StereoMatcher::compute), "left"_a, "right"_a,
-           py::call_guard<py::gil_scoped_release>(),
-           "Disparity [px] (float32, NaN = no match) of two uint8 images of equal size.")
+           py::call_guard<py::gil_scoped_release, interruptible>(),
+           "Disparity [px] (float32, NaN = no match) of two uint8 images of equal size. Ctrl-C "
+           "stops it between its OpenCV passes (two with the left-right check) and output rows.")
       .def_property_readonly("options", &StereoMatcher::options);
 
   m.def("set_opencv_threads", &set_opencv_threads, "threads"_a,

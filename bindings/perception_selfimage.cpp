@@ -116,7 +116,7 @@ void bind_perception_selfimage(py::module_& m) {
       .def("segment",
            guarded("SelfImageSegmenter.segment",
                    py::overload_cast<const FloatImage&, const StereoCameraParameters&>(&SelfImageSegmenter::segment)),
-           "depth"_a, "camera"_a, py::call_guard<py::gil_scoped_release>(),
+           "depth"_a, "camera"_a, py::call_guard<py::gil_scoped_release, interruptible>(),
            "Segment a depth map [m] (+inf = no return) of the camera's size; ValueError on NaN, "
            "z <= 0 or a wrong size.")
       .def_property_readonly("options", &SelfImageSegmenter::options);

@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "interrupt.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/soil/bekker_wong.hpp"
 #include "ernest/soil/rigid_contact.hpp"
@@ -98,6 +99,7 @@ void bind_soil(py::module_& m) {
 
   py::class_<BekkerWongModel>(m, "BekkerWongModel",
                               "Bekker–Wong wheel–soil model with the DARTS changes (eqs 12–32).")
+               interruptible scope;  // Ctrl-C every few thousand rows
       .def(py::init<const SoilParameters&, const WheelGeometry&, int>(), "soil"_a,
            "wheel"_a = WheelGeometry{}, "points_per_panel"_a = BekkerWongModel::kDefaultPointsPerPanel)
       .def("evaluate", &BekkerWongModel::evaluate, "state"_a,

@@ -237,6 +237,7 @@ void bind_walker(py::module_& m) {
              const Eigen::Isometry3d t = to_isometry(target, "target");
              const Busy busy("LegIk.solve", {&ik});
              py::gil_scoped_release release;
+             interruptible scope;  // Ctrl-C between starts and solver iterations
              return ik.solve(leg, t, seed);
            },
            "leg"_a, "target"_a, "seed"_a,
@@ -250,6 +251,7 @@ void bind_walker(py::module_& m) {
              const Busy busy("LegIk.solve_from", {&ik});
              {
                py::gil_scoped_release release;
+               interruptible scope;
                ok = ik.solve_from(leg, t, seed, q);
              }
              return py::make_tuple(ok, q);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::footfall {
@@ -383,11 +384,17 @@ bool LegCollisionChecker::valid(const Eigen::Ref<const Eigen::VectorXd>& q_leg, 
 bool LegCollisionChecker::motion_valid(const Eigen::Ref<const Eigen::VectorXd>& a,
                                        const Eigen::Ref<const Eigen::VectorXd>& b, double epsilon,
                                        bool include_wheel) {
-  require_positive("motion_valid", "epsilon", epsilon);
+  // as first_colliding_edge's resolution: a bound on the bisection depth
+  require_in_range("motion_valid", "epsilon", epsilon, kMinResolution, kInf);
   Impl& s = *impl_;
   if (!valid(b, include_wheel)) return false;
   const double length = (b - a).cwiseAbs().maxCoeff();
   if (!(length > epsilon)) return std::isfinite(length);
+  if (!(length / epsilon <= kMaxEdgeChecks)) {
+    throw std::invalid_argument("motion_valid: the edge a -> b is " + std::to_string(length) +
+                                " rad long, more than " + std::to_string(int(kMaxEdgeChecks)) +
+                                " checks of epsilon (a and b lie within the joint limits)");
+  }
   // Level-by-level bisection (§3.4.1): the midpoint of every sub-interval of a level is checked
   // before the next level, so a colliding middle is found early.
   s.queue.clear();
@@ -395,6 +402,7 @@ bool LegCollisionChecker::motion_valid(const Eigen::Ref<const Eigen::VectorXd>& 
   for (std::size_t head = 0; head < s.queue.size(); ++head) {
     const auto [t0, t1] = s.queue[head];
     if ((t1 - t0) * length <= epsilon) continue;
+    poll_interrupt();  // Ctrl-C between configuration checks (common/interrupt.hpp)
     const double tm = 0.5 * (t0 + t1);
     s.mid = a + tm * (b - a);
     if (!valid(s.mid, include_wheel)) return false;
@@ -406,7 +414,9 @@ bool LegCollisionChecker::motion_valid(const Eigen::Ref<const Eigen::VectorXd>& 
 
 int first_colliding_edge(LegCollisionChecker& checker, const Eigen::Ref<const Eigen::MatrixXd>& path,
                          double resolution, int wheel_free_edges) {
-  require_positive("first_colliding_edge", "resolution", resolution);
+  // The lower bound keeps the check count of an edge finite (a full turn of a joint is about
+  // 6e5 checks at 1e-5 rad); every check polls for Ctrl-C.
+  require_in_range("first_colliding_edge", "resolution", resolution, kMinResolution, kInf);
   require(path.rows() == checker.model().joints_per_leg() && path.cols() >= 1 && path.allFinite(),
           "first_colliding_edge: path must be finite, joints x waypoints (at least one)");
   const int edges = int(path.cols()) - 1;
@@ -415,8 +425,16 @@ int first_colliding_edge(LegCollisionChecker& checker, const Eigen::Ref<const Ei
   for (int e = 0; e < edges; ++e) {
     const bool wheel = e >= wheel_free_edges && e < edges - wheel_free_edges;
     const Eigen::VectorXd d = path.col(e + 1) - path.col(e);
-    const int steps = std::max(1, int(std::ceil(d.cwiseAbs().maxCoeff() / resolution)));
+    const double span = d.cwiseAbs().maxCoeff() / resolution;
+    if (!(span <= kMaxEdgeChecks)) {
+      throw std::invalid_argument(
+          "first_colliding_edge: path edge " + std::to_string(e) + " needs " + std::to_string(span) +
+          " checks at this resolution, more than " + std::to_string(int(kMaxEdgeChecks)) +
+          " (a path's joint angles lie within the joint limits)");
+    }
+    const int steps = std::max(1, int(std::ceil(span)));
     for (int k = 0; k <= steps; ++k) {
+      poll_interrupt();  // Ctrl-C between configuration checks (common/interrupt.hpp)
       x = path.col(e) + (double(k) / steps) * d;
       // an end shared with a wheel-free edge is checked without the wheel
       const bool w = wheel && !((k == 0 && e == wheel_free_edges && e > 0) ||

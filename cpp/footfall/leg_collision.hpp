@@ -81,8 +81,15 @@ class LegCollisionChecker {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Smallest first_colliding_edge resolution and motion_valid epsilon [rad].
+inline constexpr double kMinResolution = 1e-5;
+/// Most configuration checks along one edge (a path's joint angles lie within the joint limits:
+/// a few radians apart at most, 1e6 checks at kMinResolution).
+inline constexpr double kMaxEdgeChecks = 1e7;
+
 /// Dense re-check of a path (joints × waypoints): every step of at most `resolution` [rad] along
-/// each edge, all points (the edges' ends included) checked with `checker.valid`. Returns the
+/// each edge (resolution >= kMinResolution), all points (the edges' ends included) checked with
+/// `checker.valid`; polls for Ctrl-C between checks. Returns the
 /// index of the first edge with a collision, or -1 when the whole path is free.
 /// `wheel_free_edges` edges at each end are checked without the wheel (compliance segments).
 int first_colliding_edge(LegCollisionChecker& checker, const Eigen::Ref<const Eigen::MatrixXd>& path,

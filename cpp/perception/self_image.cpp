@@ -9,6 +9,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::perception {
@@ -79,7 +80,10 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
   const double fb = camera.focal() * camera.baseline;
   // 1. D = f B / z; +inf (no return) -> 0
   m.disp.create(h, w, CV_32F);
+  // Ctrl-C (common/interrupt.hpp) between rows, between the OpenCV passes and between the
+  // flood rounds; the workspace is scratch and `out` is written last.
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();
     float* dr = m.disp.ptr<float>(v);
     for (int u = 0; u < w; ++u) {
       const float z = depth(v, u);
@@ -100,8 +104,10 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
   cv::Sobel(m.smooth, m.gx, CV_32F, 1, 0, 3, 0.125);  // /8: per-pixel slope
   cv::Sobel(m.smooth, m.gy, CV_32F, 0, 1, 3, 0.125);
   cv::magnitude(m.gx, m.gy, m.grad);
+  poll_interrupt();
   m.flat.create(h, w, CV_8U);
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();
     const float* g = m.grad.ptr<float>(v);
     const float* d = m.disp.ptr<float>(v);
     std::uint8_t* f = m.flat.ptr<std::uint8_t>(v);
@@ -114,6 +120,7 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
     if (m.stats.at<int>(c, cv::CC_STAT_AREA) >= o.min_marker_pixels) m.marker_of_component[c] = ++labels;
   m.markers.create(h, w, CV_32S);  // continuous: indexed as v * w + u below
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();
     const int* cc = m.components.ptr<int>(v);
     const float* d = m.disp.ptr<float>(v);
     int* mk = m.markers.ptr<int>(v);
@@ -126,13 +133,16 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
   cv::minMaxLoc(m.disp, nullptr, &dmax);
   m.disp.convertTo(m.grey, CV_8U, dmax > 0.0 ? 255.0 / dmax : 0.0);
   cv::cvtColor(m.grey, m.rgb, cv::COLOR_GRAY2BGR);
+  poll_interrupt();
   cv::watershed(m.rgb, m.markers);
+  poll_interrupt();
   // Watershed lines (-1) and unreached pixels (0) join a neighbouring segment: first, in rounds,
   // those with a neighbour continuous in D (the side of the depth step they lie on), then the rest
   // to the neighbour closest in D. A round reads only the labels of the rounds before it, so the
   // scan order cannot carry a label along a line of unassigned pixels.
   m.open.clear();
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();
     const int* mk = m.markers.ptr<int>(v);
     for (int u = 0; u < w; ++u)
       if (mk[u] < 1) m.open.push_back(v * w + u);
@@ -141,6 +151,7 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
   const float* dd = m.disp.ptr<float>(0);
   for (const float limit : {static_cast<float>(o.connect_jump), std::numeric_limits<float>::infinity()}) {
     for (int round = 0; round < 10000 && !m.open.empty(); ++round) {
+      poll_interrupt();
       m.assign.clear();
       for (const int i : m.open) {
         const int v = i / w, u = i % w;
@@ -173,6 +184,7 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
   m.pixel_parent.resize(n_px);
   std::iota(m.pixel_parent.begin(), m.pixel_parent.end(), 0);
   const float jump = static_cast<float>(o.connect_jump);
+  poll_interrupt();
   for (int i = 0; i < n_px; ++i) {
     const int u = i % w;
     if (u + 1 < w && mk[i + 1] == mk[i] && std::abs(dd[i + 1] - dd[i]) <= jump) unite(m.pixel_parent, i, i + 1);
@@ -208,6 +220,7 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
     if (std::abs(da - db) <= o.connect_jump) ++p.continuous;
   };
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();
     const int* mk = m.markers.ptr<int>(v);
     const float* d = m.disp.ptr<float>(v);
     for (int u = 0; u < w; ++u) {
@@ -282,6 +295,7 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
     }
   }
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();
     const int* mk = m.markers.ptr<int>(v);
     std::uint8_t* rm = m.removed.ptr<std::uint8_t>(v);
     for (int u = 0; u < w; ++u) {
@@ -297,6 +311,7 @@ void SelfImageSegmenter::segment(const FloatImage& depth, const StereoCameraPara
   out.removed_pixels = 0;
   double zsum = 0.0;
   for (int v = 0; v < h; ++v) {
+    poll_interrupt();
     const std::uint8_t* rm = m.removed.ptr<std::uint8_t>(v);
     for (int u = 0; u < w; ++u) {
       out.removed(v, u) = rm[u];

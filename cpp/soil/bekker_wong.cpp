@@ -8,6 +8,7 @@
 #include <string>
 
 #include "ernest/common/quadrature.hpp"
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/common/vector_math.hpp"
 
@@ -309,8 +310,13 @@ void BekkerWongModel::evaluate_batch(
                                 " rows but states has " + std::to_string(states.rows()));
   }
   for (Eigen::Index i = 0; i < states.rows(); ++i) {
-    const WheelSoilForce f =
-        evaluate(ContactState{states(i, 0), states(i, 1), states(i, 2), states(i, 3), states(i, 4)});
+    if (i % 4096 == 0) poll_interrupt();  // Ctrl-C between rows (common/interrupt.hpp)
+    WheelSoilForce f;
+    try {
+      f = evaluate(ContactState{states(i, 0), states(i, 1), states(i, 2), states(i, 3), states(i, 4)});
+    } catch (const std::invalid_argument& e) {  // name the parameter and the row
+      throw std::invalid_argument("evaluate_batch: states row " + std::to_string(i) + ": " + e.what());
+    }
     forces(i, 0) = f.fx;
     forces(i, 1) = f.fy;
     forces(i, 2) = f.fz;

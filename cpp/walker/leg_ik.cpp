@@ -6,6 +6,7 @@
 #include <string>
 #include <unsupported/Eigen/LevenbergMarquardt>
 
+#include "ernest/common/interrupt.hpp"
 #include "ernest/common/validation.hpp"
 
 namespace ernest::walker {
@@ -154,6 +155,7 @@ bool LegIk::solve_from(int leg, const Eigen::Isometry3d& target,
   if (status != Eigen::LevenbergMarquardtSpace::ImproperInputParameters) {
     do {
       if (m.lm.fnorm() <= m.stop_norm) break;
+      poll_interrupt();  // Ctrl-C between solver iterations (common/interrupt.hpp)
       status = m.lm.minimizeOneStep(m.u);
     } while (status == Eigen::LevenbergMarquardtSpace::Running);
   }
@@ -194,6 +196,7 @@ IkResult LegIk::solve(int leg, const Eigen::Isometry3d& target,
   double best = std::numeric_limits<double>::infinity();
   Eigen::VectorXd start(n), q(n);
   for (int s = 0; s < options_.seeds; ++s) {
+    poll_interrupt();  // Ctrl-C between starts (common/interrupt.hpp)
     if (s == 0) {
       start = seed;
     } else {

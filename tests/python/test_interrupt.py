@@ -124,6 +124,62 @@ CHILD = textwrap.dedent(r"""
         out["delay"] = interrupt_after(0.5, mapper.map)
         o.cell = 0.1
         out["after"] = F.StabilityMapper(m, terrain, body, q, 0, o).map() is not None
+    elif case == "leg_ik":
+        from ernest_cpp import walker as W
+        m = W.WalkerModel(W.sdm_b_parameters())
+        o = W.IkOptions()
+        o.seeds, o.max_evaluations = 10000, 10**6
+        ik = W.LegIk(m, o)
+        far = np.eye(4)
+        far[:3, 3] = [50.0, 50.0, 0.0]  # unreachable: every one of the 10000 starts runs
+        seed = m.standard_configuration[:, 0]
+        out["delay"] = interrupt_after(0.5, lambda: ik.solve(0, far, seed))
+        out["after"] = len(ik.solve_from(0, far, seed)[1]) == len(seed)
+    elif case == "colliding_edge":
+        from ernest_cpp import dynamics as D, footfall as F, walker as W
+        m = W.WalkerModel(W.sdm_b_parameters())
+        body, q = m.standard_body_pose(), m.standard_configuration
+        ground = D.HeightMap.flat(8.0, 8.0, 0.05, -5.0, -4.0, -4.0)  # far below the feet
+        checker = F.LegCollisionChecker(m, ground, body, q, 0)
+        a, b = q[:, 0].copy(), q[:, 0].copy()
+        b[0] += 0.05
+        path = np.stack([a, b] * 500, axis=1)  # 999 edges of 5000 checks at 1e-5 rad
+        out["delay"] = interrupt_after(0.5, lambda: F.first_colliding_edge(checker, path, 1e-5))
+        out["after"] = F.first_colliding_edge(checker, path[:, :2], 1e-3)
+    elif case == "stereo":
+        from ernest_cpp import perception as P
+        rng = np.random.default_rng(0)
+        left = rng.integers(0, 256, (1600, 2400), dtype=np.uint8)
+        right = np.roll(left, -8, axis=1)
+        o = P.StereoMatcherOptions()
+        o.num_disparities = 128
+        matcher = P.StereoMatcher(o)
+        assert o.max_lr_difference is not None  # two passes: the left-right check is on
+        t = time.monotonic()
+        matcher.compute(left, right)
+        out["whole"] = time.monotonic() - t
+        out["delay"] = interrupt_after(0.1 * out["whole"], lambda: matcher.compute(left, right))
+        out["after"] = matcher.compute(left[:64, :600], right[:64, :600]).shape == (64, 600)
+    elif case == "segment":
+        from ernest_cpp import perception as P
+        cam = P.StereoCameraParameters()
+        cam.width, cam.height = 2400, 1600
+        rng = np.random.default_rng(0)
+        depth = (1.0 + rng.random((1600, 2400))).astype(np.float32)  # every pixel an edge
+        seg = P.SelfImageSegmenter()
+        t = time.monotonic()
+        small = P.StereoCameraParameters()
+        small.width, small.height = 600, 400
+        seg.segment(depth[:400, :600], small)
+        out["whole"] = 16 * (time.monotonic() - t)
+        out["delay"] = interrupt_after(0.2 * out["whole"], lambda: seg.segment(depth, cam))
+        out["after"] = seg.segment(depth[:400, :600], small).removed.shape == (400, 600)
+    elif case == "soil_batch":
+        from ernest_cpp import soil as S
+        m = S.BekkerWongModel(S.SoilParameters())
+        states = np.tile([0.02, 0.1, 0.0, 0.2, 0.0], (2_000_000, 1))
+        out["delay"] = interrupt_after(0.5, lambda: m.evaluate_batch(states))
+        out["after"] = bool(np.all(np.isfinite(m.evaluate_batch(states[:10]))))
     print(json.dumps(out))
 """)
 
@@ -186,6 +242,40 @@ def test_ctrl_c_stops_a_walker_joint_path():
 def test_ctrl_c_stops_a_stability_map():
     res = run_case("stability_map")
     check_prompt(res)
+    assert res["after"] is True
+
+
+def test_ctrl_c_stops_an_ik_solve_between_starts():
+    res = run_case("leg_ik")
+    check_prompt(res)
+    assert res["after"] is True
+
+
+def test_ctrl_c_stops_a_dense_path_check_between_configurations():
+    res = run_case("colliding_edge")
+    check_prompt(res)
+    assert res["after"] == -1
+
+
+def test_ctrl_c_stops_a_soil_batch_between_rows():
+    res = run_case("soil_batch")
+    check_prompt(res)
+    assert res["after"] is True
+
+
+def test_ctrl_c_stops_a_stereo_match_between_its_passes():
+    # OpenCV's block matching is one uninterruptible pass: the call stops at the next pass or
+    # output row, well before its end
+    res = run_case("stereo")
+    assert res["delay"] is not None, "the call ended before the signal: make it longer"
+    assert res["delay"] < 0.7 * res["whole"], res
+    assert res["after"] is True
+
+
+def test_ctrl_c_stops_a_self_image_segmentation_between_rows_and_passes():
+    res = run_case("segment")
+    assert res["delay"] is not None, "the call ended before the signal: make it longer"
+    assert res["delay"] < 0.3 * res["whole"] + 0.2, res
     assert res["after"] is True
 
 
