@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
     const double cpu_sbl = cpu_now() - c0;
     po.planner = PlannerType::kRrtConnect;
     PlannerOptions ro = po;
-    ro.range = 0.0;  // the reference at OMPL's default range
+    ro.range.reset();  // the reference at OMPL's default range
     LegPlanner rrt(checker, ro);
     const PlanResult c = rrt.plan(ends.col(2 * k), ends.col(2 * k + 1));
     if (c.status == PlanStatus::kSolved) ++ok_rrt, t_rrt.push_back(c.seconds), c_rrt.push_back(double(c.checks));

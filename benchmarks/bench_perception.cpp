@@ -52,7 +52,7 @@ int main() {
   const double render = median_ms(5, [&] { mapper.raycaster().render(fr.left_pose, mo.camera, 0, img, depth); });
   const int default_threads = cv::getNumThreads();
   StereoMatcherOptions plain = mo.matcher;
-  plain.max_lr_difference = -1;
+  plain.max_lr_difference.reset();
   StereoMatcher bm(plain), bm_lr(mo.matcher);
   const double bm_default = median_ms(21, [&] { bm.compute(fr.left, fr.right); });
   cv::setNumThreads(1);

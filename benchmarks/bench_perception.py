@@ -96,7 +96,7 @@ def main() -> None:
     # 1. StereoBM: ours vs cv2, one thread each
     mo = opts.matcher
     checked = P.StereoMatcher(mo)  # default: with the left-right check (a second, mirrored match)
-    mo.max_lr_difference = -1
+    mo.max_lr_difference = None
     ours = P.StereoMatcher(mo)     # the same single StereoBM call as cv2's
     P.set_opencv_threads(1)
     cv2.setNumThreads(1)

@@ -1,6 +1,8 @@
 // Declarations of the per-subsystem binding functions called from module.cpp.
 #pragma once
 
+#include <string>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <pybind11/pybind11.h>
@@ -24,4 +26,7 @@ void bind_footfall(pybind11::module_& m);
 void bind_footfall_terrain(pybind11::module_& m);  // part of bind_footfall (bindings/footfall_terrain.cpp)
 // A readable __repr__ for every bound class of `core` that has none (bindings/repr.cpp); call last.
 void add_reprs(pybind11::module_& core);
+// A number as every __repr__ prints it: the shortest text that reads back to the same double
+// (Python's float repr), without a trailing ".0": 0.015, 2, 1e-07, nan (bindings/repr.cpp).
+std::string format_number(double x);
 }  // namespace ernest::bindings

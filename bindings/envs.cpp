@@ -158,6 +158,10 @@ void bind_envs(py::module_& m) {
   m.def("generate_scenario", &generate_scenario, "options"_a, "seed"_a,
         "Generate one trial deterministically from a seed.");
   m.def("scenario_names", &scenario_names, "Names accepted by ScenarioOptions.kind.");
+  m.def("default_soil", [](const std::string& name) { return default_soil(scenario_kind(name)); },
+        "scenario"_a,
+        "The soil preset the scenario stands on unless one is chosen: 'dry_sand' for the Bickler "
+        "trap, 'm90' elsewhere (ernest_runtime --scenario takes the same).");
   m.def("ripple_height", &ripple_height, "x"_a, "amplitude"_a, "wavelength"_a, "alpha"_a, "eq 39");
 
   py::class_<EnvOptions>(m, "EnvOptions", "Options of one ERNEST episode (see rover_env.hpp).")
@@ -224,7 +228,7 @@ void bind_envs(py::module_& m) {
       }), "the episode's Scenario (shared; after the next reset() it stays the old episode's)")
       .def_property_readonly("metrics", env_getter("RoverEnv.metrics", +[](const RoverEnv& e) {
         return metrics_dict(e.metrics(), e.parameters().total_mass());
-      }))
+      }), "the episode's metrics so far; cost_of_transport is inf until the rover has made progress")
       .def_property_readonly("episode_seed", &RoverEnv::episode_seed)
       .def_property_readonly("done", &RoverEnv::done)
       .def_property_readonly("substeps", &RoverEnv::substeps)

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "ernest/common/validation.hpp"
 #include "interrupt.hpp"
 #include "exclusive.hpp"
 #include "ernest/footfall/leg_collision.hpp"
@@ -160,7 +161,17 @@ void bind_footfall(py::module_& m) {
       .def_readwrite("planner", &PlannerOptions::planner)
       .def_readwrite("time_limit", &PlannerOptions::time_limit, "[s]")
       .def_readwrite("epsilon", &PlannerOptions::epsilon, "[rad]")
-      .def_readwrite("range", &PlannerOptions::range, "[rad]; 0 = OMPL's default")
+      .def_property(
+          "range", [](const PlannerOptions& o) { return o.range; },
+          [](PlannerOptions& o, std::optional<double> r) {
+            if (r) {
+              ernest::require_in_range("PlannerOptions", "range", *r, 0.0, 100.0);
+              ernest::require_positive("PlannerOptions", "range", *r);
+            }
+            o.range = r;
+          },
+          "longest tree step [rad], (0, 100]; None: OMPL's default (20 % of the joint space's "
+          "extent)")
       .def_readwrite("seed", &PlannerOptions::seed)
       .def("validate", &PlannerOptions::validate, "Raise ValueError naming the field.");
   py::class_<PlanResult>(m, "PlanResult", "A plan, or none with the reason.")

@@ -150,11 +150,7 @@ void bind_opt(py::module_& m) {
            "x"_a, "y"_a, "heading"_a)
       .def_readwrite("x", &Pose2::x)
       .def_readwrite("y", &Pose2::y)
-      .def_readwrite("heading", &Pose2::heading)
-      .def("__repr__", [](const Pose2& p) {
-        return "Pose2(x=" + std::to_string(p.x) + ", y=" + std::to_string(p.y) +
-               ", heading=" + std::to_string(p.heading) + ")";
-      });
+      .def_readwrite("heading", &Pose2::heading);
   m.def("compose", &compose, "a"_a, "b"_a, "a ⊕ b.");
   m.def("relative", &relative, "a"_a, "b"_a, "a^-1 ⊕ b.");
 
@@ -229,7 +225,7 @@ void bind_opt(py::module_& m) {
       .def("check_limits", &Gait::check_limits, "position_limit"_a, "velocity_limit"_a,
            "Raise ValueError if the gait leaves the limits.")
       .def("__repr__", [](const Gait& g) {
-        return "Gait('" + g.name() + "', period=" + std::to_string(g.period()) + ")";
+        return "Gait('" + g.name() + "', period=" + format_number(g.period()) + " s)";
       });
   m.def("squirming", &squirming, "p"_a = AsterixParameters{}, "The squirming gait (Fig. 5).");
   m.def("wheel_walking", &wheel_walking, "p"_a = AsterixParameters{},
@@ -264,7 +260,7 @@ void bind_opt(py::module_& m) {
       .def_readonly("seconds", &SolverResult::seconds)
       .def_property_readonly("converged", &SolverResult::converged)
       .def("__repr__", [](const SolverResult& r) {
-        return "SolverResult(value=" + std::to_string(r.value) + ", status=" + r.status_name +
+        return "SolverResult(value=" + format_number(r.value) + ", status=" + r.status_name +
                ", evaluations=" + std::to_string(r.evaluations) + ")";
       });
 
@@ -344,12 +340,7 @@ void bind_opt(py::module_& m) {
       .def_readwrite("deviation", &CostWeights::deviation, "w3")
       .def_readwrite("linear", &CostWeights::linear, "weight of eq 19 (Linear only)")
       .def("validate", &CostWeights::validate, "Raise ValueError on an invalid field.")
-      .def_static("table1", &CostWeights::table1, "strategy"_a, "set"_a, "Table 1 of seed 000.")
-      .def("__repr__", [](const CostWeights& w) {
-        return "CostWeights(duration=" + std::to_string(w.duration) +
-               ", acceleration=" + std::to_string(w.acceleration) +
-               ", deviation=" + std::to_string(w.deviation) + ", linear=" + std::to_string(w.linear) + ")";
-      });
+      .def_static("table1", &CostWeights::table1, "strategy"_a, "set"_a, "Table 1 of seed 000.");
 
   py::class_<TransitionOptions>(m, "TransitionOptions",
                                 "Options of the optimised strategies (normalisations of eq 8).")

@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "ernest/common/validation.hpp"
 #include "exclusive.hpp"
 #include "pose.hpp"
 #include "ernest/perception/stereo_mapper.hpp"
@@ -130,8 +131,13 @@ void bind_perception(py::module_& m) {
       .def_readwrite("speckle_window", &StereoMatcherOptions::speckle_window, "[px]")
       .def_readwrite("speckle_range", &StereoMatcherOptions::speckle_range, "[px]")
       .def_readwrite("pre_filter_cap", &StereoMatcherOptions::pre_filter_cap)
-      .def_readwrite("max_lr_difference", &StereoMatcherOptions::max_lr_difference,
-                     "left-right check tolerance [px], -1 = off")
+      .def_property(
+          "max_lr_difference", [](const StereoMatcherOptions& o) { return o.max_lr_difference; },
+          [](StereoMatcherOptions& o, std::optional<int> d) {
+            if (d) ernest::require_in_range("StereoMatcherOptions", "max_lr_difference", *d, 0, 1024);
+            o.max_lr_difference = d;
+          },
+          "left-right check tolerance [px], [0, 1024]; None: no check")
       .def("validate", &StereoMatcherOptions::validate, "Raise ValueError on an invalid field.");
 
   py::class_<StereoMatcher>(m, "StereoMatcher", "OpenCV stereo matcher (StereoBM by default).")

@@ -1,6 +1,8 @@
 // Readable __repr__ for every bound class that has none of its own: `Type(field=value unit, ...)`
 // built from the class's properties, with the unit taken from the property's docstring ("... [N]")
-// or from the table below. Installed once, after all classes are bound (module.cpp).
+// or from the table below. Installed once, after all classes are bound (module.cpp). Scalars print
+// as format_number (shortest round-trip text, as the hand-written reprs do); arrays print 4
+// significant digits (a summary).
 #include <algorithm>
 #include <map>
 #include <regex>
@@ -42,6 +44,8 @@ const std::map<std::string, std::map<std::string, std::string>>& unit_table() {
       {"TransitionProblem", {{"t1", "s"}}},
       {"MassFitResult", {{"rmse", "N"}, {"residual_sigma", "N"}}},
       {"Snapshot", {{"time", "s"}}},
+      {"Pose2", {{"x", "m"}, {"y", "m"}, {"heading", "rad"}}},
+      {"StabilityMargins", {{"ssm", "m"}, {"nesm", "m"}, {"ssm_cps", "m"}, {"nesm_cps", "m"}}},
   };
   return t;
 }
@@ -171,8 +175,7 @@ std::vector<Field> fields_of(const py::module_& core, const py::handle& cls,
 
 std::string format_value(const py::object& value, Kind kind) {
   if (kind == Kind::Nested) return py::repr(value);
-  if (py::isinstance<py::float_>(value))
-    return py::str("{:.6g}").attr("format")(value).cast<std::string>();
+  if (py::isinstance<py::float_>(value)) return format_number(value.cast<double>());
   if (py::isinstance<py::str>(value) || py::isinstance<py::bool_>(value) ||
       py::isinstance<py::int_>(value))
     return py::repr(value);
@@ -220,6 +223,14 @@ void install(const py::handle& cls, const std::string& name, const std::vector<F
 
 
 }  // namespace
+
+std::string format_number(double x) {
+  // Python's float repr is the shortest text that reads back to x (and switches to an exponent
+  // below 1e-4 and from 1e16, where to_chars's shortest form would pick 1e+05 for 100000).
+  std::string s = py::repr(py::float_(x)).cast<std::string>();
+  if (s.size() > 2 && s.compare(s.size() - 2, 2, ".0") == 0) s.resize(s.size() - 2);
+  return s;
+}
 
 void add_reprs(py::module_& core) {
   const py::object base_exception = py::module_::import("builtins").attr("BaseException");

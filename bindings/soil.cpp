@@ -53,12 +53,7 @@ void bind_soil(py::module_& m) {
                   "Wet sand (our assumption; higher cohesion, softer than M90).")
       .def_static("preset", &SoilParameters::preset, "name"_a,
                   "Preset by name: 'dry_sand', 'm90' or 'wet_sand'.")
-      .def_static("preset_names", &SoilParameters::preset_names, "Names accepted by preset().")
-      .def("__repr__", [](const SoilParameters& p) {
-        return "SoilParameters(density=" + std::to_string(p.density) +
-               ", cohesion=" + std::to_string(p.cohesion) +
-               ", n=" + std::to_string(p.sinkage_exponent) + ", ...)";
-      });
+      .def_static("preset_names", &SoilParameters::preset_names, "Names accepted by preset().");
 
   py::class_<WheelGeometry>(m, "WheelGeometry", "Rigid wheel: radius r and width b [m].")
       .def(py::init<>())
@@ -90,12 +85,7 @@ void bind_soil(py::module_& m) {
       .def_readonly("theta_f", &WheelSoilForce::theta_f, "eq 13 [rad]")
       .def_readonly("theta_m", &WheelSoilForce::theta_m, "eq 14 [rad]")
       .def_readonly("theta_r", &WheelSoilForce::theta_r, "eq 15 [rad]")
-      .def_readonly("sinkage", &WheelSoilForce::sinkage, "sinkage used, clamped to [0, r] [m]")
-      .def("__repr__", [](const WheelSoilForce& f) {
-        return "WheelSoilForce(fx=" + std::to_string(f.fx) + ", fy=" + std::to_string(f.fy) +
-               ", fz=" + std::to_string(f.fz) + ", axle_torque=" + std::to_string(f.axle_torque) +
-               ", slip=" + std::to_string(f.slip) + ")";
-      });
+      .def_readonly("sinkage", &WheelSoilForce::sinkage, "sinkage used, clamped to [0, r] [m]");
 
   py::class_<BekkerWongModel>(m, "BekkerWongModel",
                               "Bekker–Wong wheel–soil model with the DARTS changes (eqs 12–32).")

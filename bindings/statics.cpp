@@ -192,13 +192,7 @@ void bind_stability(py::module_& m) {
       .def_readonly("ssm", &StabilityMargins::ssm)
       .def_readonly("nesm", &StabilityMargins::nesm)
       .def_readonly("ssm_cps", &StabilityMargins::ssm_cps)
-      .def_readonly("nesm_cps", &StabilityMargins::nesm_cps)
-      .def("__repr__", [](const StabilityMargins& s) {
-        std::ostringstream os;
-        os << "StabilityMargins(ssm=" << s.ssm << ", nesm=" << s.nesm << ", ssm_cps=" << s.ssm_cps
-           << ", nesm_cps=" << s.nesm_cps << ")";
-        return os.str();
-      });
+      .def_readonly("nesm_cps", &StabilityMargins::nesm_cps);
   m.def(
       "stability_margins",
       [](const Array& contacts, const Array& cg, const Array& gravity) {

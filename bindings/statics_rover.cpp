@@ -37,10 +37,10 @@ void bind_statics_rover(py::module_& m) {
       .def_static("from_parameters", &MassModel::from_parameters, "p"_a,
                   "The simulator's own model: RoverParameters' bodies grouped as §3.2 groups them.")
       .def("__repr__", [](const MassModel& x) {
-        return "MassModel(m_c=" + std::to_string(x.chassis_mass) + ", m_b=" +
-               std::to_string(x.bogie_mass) + ", com=(" + std::to_string(x.chassis_com.x()) + ", " +
-               std::to_string(x.chassis_com.y()) + ", " + std::to_string(x.chassis_com.z()) +
-               "), z_b=" + std::to_string(x.bogie_com_height) + ")";
+        return "MassModel(m_c=" + format_number(x.chassis_mass) + " kg, m_b=" +
+               format_number(x.bogie_mass) + " kg, com=(" + format_number(x.chassis_com.x()) +
+               ", " + format_number(x.chassis_com.y()) + ", " + format_number(x.chassis_com.z()) +
+               ") m, z_b=" + format_number(x.bogie_com_height) + " m)";
       });
   m.attr("MASS_MODEL_PARAMETERS") = py::cast(std::vector<std::string>(
       mass_model_parameter_names().begin(), mass_model_parameter_names().end()));
@@ -71,8 +71,8 @@ void bind_statics_rover(py::module_& m) {
       .def_readwrite("loads", &LoadPose::loads, "measured vertical loads [N], FL FR RL RR")
       .def_readwrite("horizontal_forces", &LoadPose::horizontal_forces,
                      "2x4: world x, y of each wheel's ground force [N] (zero: eq 11 as printed)")
-      .def("validate", &LoadPose::validate, "index"_a = -1,
-           "Raise ValueError naming the first invalid field.");
+      .def("validate", &LoadPose::validate, "index"_a = py::none(),
+           "Raise ValueError naming the first invalid field (as poses[index] with an index).");
 
   py::class_<LoadEquations>(m, "LoadEquations",
                             "Statics of a pose: A f = b + t tau (force balance, moments about world "
@@ -98,8 +98,9 @@ void bind_statics_rover(py::module_& m) {
                             "Fitted model, 1-sigma errors (inf: not identifiable from the poses), "
                             "covariance, R^2 (paper: 0.96), RMSE, LM status.")
       .def_readonly("model", &MassFitResult::model)
-      .def_readonly("std_error", &MassFitResult::std_error)
-      .def_readonly("covariance", &MassFitResult::covariance)
+      .def_readonly("std_error", &MassFitResult::std_error, "inf for a parameter not identifiable")
+      .def_readonly("covariance", &MassFitResult::covariance,
+                    "NaN in the rows and columns of a parameter not identifiable")
       .def_readonly("r_squared", &MassFitResult::r_squared)
       .def_readonly("rmse", &MassFitResult::rmse)
       .def_readonly("residual_sigma", &MassFitResult::residual_sigma)

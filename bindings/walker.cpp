@@ -187,7 +187,7 @@ void bind_walker(py::module_& m) {
       .def("__repr__", [](const CollisionPair& c) {
         return "CollisionPair(" + std::to_string(c.leg_a) + ":" + std::to_string(c.link_a) + ", " +
                std::to_string(c.leg_b) + ":" + std::to_string(c.link_b) +
-               ", distance=" + std::to_string(c.distance) + ")";
+               ", distance=" + format_number(c.distance) + " m)";
       });
   m.attr("CHASSIS") = kChassis;
   m.def("self_collisions", &self_collisions, "model"_a, "q"_a, "clearance"_a = 0.0,

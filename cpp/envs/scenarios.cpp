@@ -105,6 +105,10 @@ std::vector<std::string> scenario_names() {
   return out;
 }
 
+std::string default_soil(ScenarioKind kind) {
+  return kind == ScenarioKind::BicklerTrap ? "dry_sand" : "m90";
+}
+
 void ScenarioOptions::validate() const {
   const char* o = "ScenarioOptions";
   require_in_range(o, "grid_spacing", grid_spacing, 0.01, 0.5);

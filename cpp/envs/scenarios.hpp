@@ -20,6 +20,11 @@ enum class ScenarioKind { Flat, RockField, Step, Ripples, Slope, BicklerTrap, Sl
 ScenarioKind scenario_kind(const std::string& name);
 std::string scenario_name(ScenarioKind kind);
 std::vector<std::string> scenario_names();
+/// The soil preset a scenario stands on unless one is chosen: Table 2's dry sand for the Bickler
+/// trap (the only ground on which its rocks give seed 004 §5.2's passive outcome at every friction
+/// of Table 3; benchmarks/RESULTS.md, "Bickler trap"), M90 elsewhere. The Gymnasium ids and
+/// ernest_runtime both take it from here.
+std::string default_soil(ScenarioKind kind);
 
 struct ScenarioOptions {
   ScenarioKind kind = ScenarioKind::RockField;

@@ -29,7 +29,10 @@ void PlannerOptions::validate() const {
   const char* o = "PlannerOptions";
   require_in_range(o, "time_limit", time_limit, 1e-4, 3600.0);
   require_in_range(o, "epsilon", epsilon, 1e-5, 1.0);
-  require_in_range(o, "range", range, 0.0, 100.0);
+  if (range) {
+    require_in_range(o, "range", *range, 0.0, 100.0);
+    require_positive(o, "range", *range);  // no 0 for "OMPL's default": unset the field
+  }
 }
 
 double path_length(const Eigen::Ref<const Eigen::MatrixXd>& path) {
@@ -170,11 +173,11 @@ PlanResult LegPlanner::plan(const Eigen::Ref<const Eigen::VectorXd>& start, cons
   ob::PlannerPtr planner;
   if (options_.planner == PlannerType::kSbl) {
     auto sbl = std::make_shared<SeededSbl>(s.si, options_.seed);
-    if (options_.range > 0.0) sbl->setRange(options_.range);
+    if (options_.range) sbl->setRange(*options_.range);
     planner = sbl;
   } else {
     auto rrt = std::make_shared<og::RRTConnect>(s.si);
-    if (options_.range > 0.0) rrt->setRange(options_.range);
+    if (options_.range) rrt->setRange(*options_.range);
     planner = rrt;
   }
   planner->setProblemDefinition(pdef);

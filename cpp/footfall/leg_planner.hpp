@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "ernest/footfall/leg_collision.hpp"
@@ -24,11 +25,11 @@ struct PlannerOptions {
   PlannerType planner = PlannerType::kSbl;
   double time_limit = 1.0;   ///< planning budget [s]; past it the result is kNoPlan ("timeout")
   double epsilon = 0.01;     ///< bisection resolution of the edge checks [rad] (§3.4.1)
-  /// Longest tree step [rad]; 0: OMPL's default (20 % of the joint space's extent, ~4.6 rad for
-  /// SDM-B). 1 rad: on the benchmark's rock field SBL's hard queries (no free straight edge) took
+  /// Longest tree step [rad], (0, 100]; unset: OMPL's default (20 % of the joint space's extent,
+  /// ~4.6 rad for SDM-B). 1 rad: on the benchmark's rock field SBL's hard queries (no free straight edge) took
   /// 11 ms median instead of 22–66 ms at the default, the raw paths are half as long (12 vs
   /// 24 rad) so smoothing them costs less, all 60 queries solved (benchmarks/RESULTS.md).
-  double range = 1.0;
+  std::optional<double> range = 1.0;
   std::uint32_t seed = 1;    ///< seeds every random stream of the planner
   void validate() const;
 };

@@ -28,7 +28,7 @@ void StereoMatcherOptions::validate() const {
   require_in_range(o, "speckle_window", speckle_window, 0, 10000);
   require_in_range(o, "speckle_range", speckle_range, 0, 1000);
   require_in_range(o, "pre_filter_cap", pre_filter_cap, 1, 63);
-  require_in_range(o, "max_lr_difference", max_lr_difference, -1, 1024);
+  if (max_lr_difference) require_in_range(o, "max_lr_difference", *max_lr_difference, 0, 1024);
 }
 
 struct StereoMatcher::Impl {
@@ -53,7 +53,8 @@ StereoMatcher::StereoMatcher(const StereoMatcherOptions& options)
     // P1, P2: OpenCV's documented choice 8 and 32 x channels x block area
     const int area = o.block_size * o.block_size;
     impl_->matcher = cv::StereoSGBM::create(0, o.num_disparities, o.block_size, 8 * area, 32 * area,
-                                            o.max_lr_difference, o.pre_filter_cap, o.uniqueness_ratio,
+                                            o.max_lr_difference.value_or(-1),  // OpenCV's "off"
+                                            o.pre_filter_cap, o.uniqueness_ratio,
                                             o.speckle_window, o.speckle_range,
                                             cv::StereoSGBM::MODE_SGBM);
   }
@@ -83,7 +84,7 @@ FloatImage StereoMatcher::compute(const GrayImage& left, const GrayImage& right)
   // Right-image disparity for the left-right check: match the mirrored pair with the roles
   // swapped (a right pixel u_R = u_L - d is, mirrored, the left pixel of a pair with disparity d).
   const bool lr_check =
-      options_.algorithm == StereoAlgorithm::BlockMatching && options_.max_lr_difference >= 0;
+      options_.algorithm == StereoAlgorithm::BlockMatching && options_.max_lr_difference.has_value();
   cv::Mat right16;
   if (lr_check) {
     cv::Mat lf, rf, d;
@@ -96,7 +97,7 @@ FloatImage StereoMatcher::compute(const GrayImage& left, const GrayImage& right)
   FloatImage out(h, w);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const int min_valid = 16 * impl_->matcher->getMinDisparity();  // invalid = (min - 1) * 16
-  const int tol16 = 16 * options_.max_lr_difference;
+  const int tol16 = 16 * options_.max_lr_difference.value_or(0);
   for (int v = 0; v < h; ++v) {
     const auto* row = disp16.ptr<std::int16_t>(v);
     poll_interrupt();

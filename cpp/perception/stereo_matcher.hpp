@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "ernest/perception/camera.hpp"
@@ -24,9 +25,9 @@ struct StereoMatcherOptions {
   int speckle_range = 2;      ///< disparity spread inside a speckle region [px]
   int pre_filter_cap = 31;
   /// Left-right consistency: the largest disagreement [px] allowed between the left and the
-  /// right disparity (OpenCV's disp12MaxDiff; -1 = no check). Removes most of the matches that
-  /// straddle an occlusion boundary, whose points would float behind rocks.
-  int max_lr_difference = 1;
+  /// right disparity (OpenCV's disp12MaxDiff), [0, 1024]; unset: no check. Removes most of the
+  /// matches that straddle an occlusion boundary, whose points would float behind rocks.
+  std::optional<int> max_lr_difference = 1;
   void validate() const;
 };
 

@@ -1,6 +1,7 @@
 // ernest_runtime: the onboard runtime against the C++ simulator, no Python (seed 004 §5).
 //   ernest_runtime --policy FILE --scenario NAME --seed N --duration S [--telemetry out.csv]
 //                  [--mode env|onboard] [--soil NAME] [--passive] [--actions out.csv] [--quiet]
+//                  (--soil: the scenario's default soil, envs::default_soil, unless given)
 //                  [--terrain-source truth|stereo]   (stereo: elevation samples from the map the
 //                  loop fuses from ray-cast stereo pairs, seed 004 §2.4)
 //   ernest_runtime --policy FILE --replay observations.csv --actions out.csv
@@ -72,6 +73,8 @@ void usage(std::FILE* out) {
                "usage: ernest_runtime --policy FILE --scenario NAME --seed N --duration S\n"
                "                      [--telemetry out.csv] [--actions out.csv] [--mode env|onboard]\n"
                "                      [--soil m90|dry_sand|wet_sand] [--passive] [--quiet]\n"
+               "                      (--soil default: the scenario's, as its Gymnasium id:\n"
+               "                      dry_sand for bickler, m90 otherwise)\n"
                "                      [--terrain-source truth|stereo]\n"
                "       ernest_runtime --policy FILE --replay observations.csv --actions out.csv\n"
                "       ernest_runtime --help\n"
@@ -298,7 +301,7 @@ class ObservationReader {
 
 int main(int argc, char** argv) {
   using namespace ernest;
-  std::string policy_path, scenario, telemetry_path, actions_path, replay_path, mode = "env", soil = "m90",
+  std::string policy_path, scenario, telemetry_path, actions_path, replay_path, mode = "env", soil,
               terrain_source = "truth";
   long long seed = -1;
   double duration = -1.0;
@@ -338,6 +341,7 @@ int main(int argc, char** argv) {
       if (!have_duration) throw UsageError("--duration S is required");
       if (duration <= 0.0) throw UsageError("--duration " + std::to_string(duration) + " must be > 0");
       require_choice("--mode", mode, {"env", "onboard"});
+      if (soil.empty()) soil = envs::default_soil(envs::scenario_kind(scenario));
       try {
         soil::SoilParameters::preset(soil);
       } catch (const std::invalid_argument& e) {
@@ -415,8 +419,9 @@ int main(int argc, char** argv) {
     }
     if (telemetry) telemetry->close();
     const runtime::LatencyStats lat = policy.latency();
-    std::printf("scenario %s seed %lld mode %s: %s after %.1f s (%zu policy steps)\n", scenario.c_str(), seed,
-                mode.c_str(), rep.end.c_str(), rep.metrics.time, rep.actions.size());
+    std::printf("scenario %s on %s seed %lld mode %s: %s after %.1f s (%zu policy steps)\n",
+                scenario.c_str(), soil.c_str(), seed, mode.c_str(), rep.end.c_str(), rep.metrics.time,
+                rep.actions.size());
     std::printf("progress along the path  %.3f m\n", rep.metrics.progress);
     std::printf("travel reduction         %.3f (fraction: 1 - progress / no-slip travel)\n", rep.travel_reduction);
     std::printf("cost of transport        %.3f (dimensionless: energy / (m g progress))\n", rep.cost_of_transport);

@@ -10,7 +10,7 @@ namespace ernest::runtime {
 
 void LimitOptions::validate() const {
   velocity.validate();
-  require_in_range("LimitOptions", "joint_margin", joint_margin, -1.0, 0.5);
+  if (joint_margin) require_in_range("LimitOptions", "joint_margin", *joint_margin, 0.0, 0.5);
   require_positive("LimitOptions", "max_wheel_speed", max_wheel_speed);
 }
 
@@ -20,12 +20,13 @@ Eigen::Vector3d limit_command(const Eigen::Vector3d& c, double psi, double phi,
   Eigen::Vector3d out(std::clamp(c[0], 0.0, o.velocity.vx_max),
                       std::clamp(c[1], -o.velocity.yaw_rate_max, o.velocity.yaw_rate_max),
                       std::clamp(c[2], -o.velocity.roll_rate_max, o.velocity.roll_rate_max));
-  if (o.joint_margin >= 0.0) {
-    if ((psi >= p.yaw_limit - o.joint_margin && out[1] > 0.0) ||
-        (psi <= -p.yaw_limit + o.joint_margin && out[1] < 0.0))
+  if (o.joint_margin) {
+    const double margin = *o.joint_margin;
+    if ((psi >= p.yaw_limit - margin && out[1] > 0.0) ||
+        (psi <= -p.yaw_limit + margin && out[1] < 0.0))
       out[1] = 0.0;
-    if ((phi >= p.roll_limit - o.joint_margin && out[2] > 0.0) ||
-        (phi <= -p.roll_limit + o.joint_margin && out[2] < 0.0))
+    if ((phi >= p.roll_limit - margin && out[2] > 0.0) ||
+        (phi <= -p.roll_limit + margin && out[2] < 0.0))
       out[2] = 0.0;
   }
   return out;

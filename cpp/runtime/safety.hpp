@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 
 #include "ernest/dynamics/rover_parameters.hpp"
@@ -15,8 +16,9 @@ namespace ernest::runtime {
 struct LimitOptions {
   sensing::ActionLimits velocity{};  ///< Vx in [0, vx_max], |yaw rate|, |roll rate| (§4.2)
   /// A gimbal rate that drives a joint further is zeroed once the joint is within this margin
-  /// of its stop (RoverParameters::yaw_limit / roll_limit) [rad]; < 0 disables joint limiting.
-  double joint_margin = 0.035;       // 2 deg
+  /// of its stop (RoverParameters::yaw_limit / roll_limit) [rad], [0, 0.5]; unset: no joint
+  /// limiting.
+  std::optional<double> joint_margin = 0.035;  // 2 deg
   /// Largest wheel speed sent to the drives [rad/s]: the synchroniser may ask more than Vx / r
   /// while the bogie swings; 3x the top speed of a 0.17 m wheel at 0.2 m/s.
   double max_wheel_speed = 3.5;

@@ -84,8 +84,8 @@ RoverGeometry RoverGeometry::from_parameters(const dynamics::RoverParameters& p,
   return g;
 }
 
-void LoadPose::validate(int index) const {
-  const std::string o = index < 0 ? std::string("LoadPose") : "poses[" + std::to_string(index) + "]";
+void LoadPose::validate(std::optional<int> index) const {
+  const std::string o = index ? "poses[" + std::to_string(*index) + "]" : std::string("LoadPose");
   for (int k = 0; k < 4; ++k) {
     require_finite(o.c_str(), "chassis_quaternion", chassis_quaternion[k]);
     require_finite(o.c_str(), "loads", loads[k]);

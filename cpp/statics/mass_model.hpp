@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -71,7 +72,8 @@ struct LoadPose {
   /// friction (on a slope, or scrubbed sideways while the bogie rolled into place).
   Eigen::Matrix<double, 2, 4> horizontal_forces = Eigen::Matrix<double, 2, 4>::Zero();
 
-  void validate(int index = -1) const;  ///< finite, non-zero quaternion and normal
+  /// Finite, non-zero quaternion and normal; `index` (poses[index]) names the pose in messages.
+  void validate(std::optional<int> index = std::nullopt) const;
 };
 
 /// The statics of one pose as a linear system A f = b + t tau in the four vertical loads f and the

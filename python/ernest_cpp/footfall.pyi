@@ -88,7 +88,7 @@ class PlannerOptions:
     planner: PlannerType
     time_limit: float
     epsilon: float
-    range: float
+    range: float | None
     seed: int
     def __init__(self) -> None: ...
     def validate(self) -> None: ...

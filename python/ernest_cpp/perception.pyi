@@ -66,7 +66,7 @@ class StereoMatcherOptions:
     speckle_window: int
     speckle_range: int
     pre_filter_cap: int
-    max_lr_difference: int
+    max_lr_difference: int | None
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 

@@ -1,6 +1,7 @@
 """The scenarios' names: one short name each, used by every command line (``ernest train
 --scenario``, ``ernest evaluate --scenario``, ``ernest_runtime --scenario``) and by
-``envs.ErnestEnv``, and the Gymnasium id it is registered under. The short names are the C++
+``envs.ErnestEnv`` (which refuses any other name), and the Gymnasium id it is registered under.
+The short names are the C++
 core's (``envs.scenario_names()``); docs/envs.md has the table.
 """
 

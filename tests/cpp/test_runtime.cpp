@@ -331,6 +331,17 @@ TEST(Safety, VelocityAndJointLimits) {
   c = runtime::limit_command({0.1, 0.0, -0.1}, 0.0, -p.roll_limit, p, o);
   EXPECT_EQ(c[2], 0.0);
   EXPECT_TRUE(runtime::limit_command({NAN, 0, 0}, 0, 0, p, o).isZero());
+  // No joint limiting is the unset margin; a negative one is refused, naming the field.
+  o.joint_margin.reset();
+  EXPECT_EQ(runtime::limit_command({0.1, 0.2, 0.0}, p.yaw_limit, 0.0, p, o)[1], 0.2);
+  o.validate();
+  o.joint_margin = -1.0;
+  try {
+    o.validate();
+    ADD_FAILURE() << "a negative joint_margin was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("LimitOptions.joint_margin = -1"), std::string::npos) << e.what();
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -503,7 +514,7 @@ TEST(Watchdog, FailedInferenceCommandsZeroAndTheLoopKeepsRunning) {
 // action in force.
 TEST(OnboardLoop, JointLimitsStopTheGimbalShortOfItsStop) {
   const dynamics::RoverParameters params;
-  auto run = [&](double margin, Eigen::Vector3d* last_command, sensing::ActionVector* last_action) {
+  auto run = [&](std::optional<double> margin, Eigen::Vector3d* last_command, sensing::ActionVector* last_action) {
     envs::RoverEnv env(params, flat_options(30.0));
     env.reset(2);
     runtime::Policy policy(constant_policy("yawing", {0.05, 0.2618, 0.0}));
@@ -521,7 +532,7 @@ TEST(OnboardLoop, JointLimitsStopTheGimbalShortOfItsStop) {
     if (last_action) *last_action = loop.action();
     return max_psi;
   };
-  const double free_psi = run(-1.0, nullptr, nullptr);
+  const double free_psi = run(std::nullopt, nullptr, nullptr);
   EXPECT_GT(free_psi, params.yaw_limit - 0.01) << "without limiting the joint reaches its stop";
   Eigen::Vector3d cmd;
   sensing::ActionVector act;
@@ -549,7 +560,7 @@ TEST(OnboardLoop, ReproducesTheEnvironmentEpisode) {
     runtime::LoopOptions lo;
     env.reset(seed);
     lo = runtime::LoopOptions::from_env(env);
-    lo.limits.joint_margin = -1.0;       // the environment has no joint limiting
+    lo.limits.joint_margin.reset();      // the environment has no joint limiting
     lo.limits.max_wheel_speed = 1e3;     // nor a wheel-speed clamp
     const runtime::EpisodeReport b = runtime::run_onboard_episode(env, policy, seed, &lo);
     ASSERT_EQ(a.actions.size(), 16u);
@@ -581,7 +592,7 @@ TEST(OnboardLoop, ReproducesTheStereoEnvironmentEpisode) {
   env.reset(11);
   runtime::LoopOptions lo = runtime::LoopOptions::from_env(env);
   EXPECT_TRUE(lo.stereo_map);
-  lo.limits.joint_margin = -1.0;
+  lo.limits.joint_margin.reset();
   lo.limits.max_wheel_speed = 1e3;
   const runtime::EpisodeReport b = runtime::run_onboard_episode(env, policy, 11, &lo);
   ASSERT_EQ(a.actions.size(), 10u);

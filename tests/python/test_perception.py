@@ -57,7 +57,7 @@ def test_stereo_bm_equals_cv2_on_the_same_pair():
     cam, _, left, right, depth = _pair()
     o = P.StereoMatcherOptions()
     checked = P.StereoMatcher(o).compute(left, right)
-    o.max_lr_difference = -1  # cv2's StereoBM has no left-right check: compare without ours
+    o.max_lr_difference = None  # cv2's StereoBM has no left-right check: compare without ours
     ours = P.StereoMatcher(o).compute(left, right)
     # the check only removes matches
     assert np.all(np.isfinite(ours)[np.isfinite(checked)])

@@ -103,8 +103,9 @@ def test_env_arguments_are_checked_and_named():
     import ernest_cpp.envs  # noqa: F401  (registers the ids)
     from ernest_cpp.envs import ErnestEnv, ErnestVectorEnv
 
-    with pytest.raises(TypeError, match=r"soil = None must be a str"):
-        gym.make("ernest/Flat-v0", soil=None)
+    with pytest.raises(TypeError, match=r"soil = 3 must be a str"):
+        gym.make("ernest/Flat-v0", soil=3)
+    assert gym.make("ernest/Flat-v0", soil=None).unwrapped.options.soil == "m90"  # the scenario's
     env = gym.make("ernest/Flat-v0")
     env.reset(seed=0)
     with pytest.raises(ValueError, match=r"action must be numbers in \[-1, 1\], got 'abc'"):

@@ -134,6 +134,32 @@ def test_parity_python_actor_vs_cpp_runtime_whole_episode(exported, tmp_path, on
     np.testing.assert_allclose(rows["action_vx [-]"], cpp[:, 0], atol=1e-12)
 
 
+def test_runtime_stands_each_scenario_on_its_gymnasium_ids_soil(exported, tmp_path, one_thread):
+    """Without --soil the runtime takes the scenario's soil (envs.core.default_soil), as its
+    Gymnasium id does: the Bickler trap on dry sand, the same episode as ernest/BicklerTrap-v0."""
+    import gymnasium as gym
+
+    from ernest_cpp.scenarios import SCENARIOS
+
+    actor, lay, path = exported
+    for scenario in ("bickler", "step"):
+        soil = gym.make(SCENARIOS[scenario]).unwrapped.options.soil
+        assert soil == ("dry_sand" if scenario == "bickler" else "m90")
+        r = run_runtime("--policy", path, "--scenario", scenario, "--seed", "1", "--duration", "1",
+                        "--quiet")
+        assert r.returncode == 0, r.stdout + r.stderr
+        assert f"scenario {scenario} on {soil} seed 1 " in r.stdout, r.stdout
+    python_actor = ExportedPolicy(actor, lay, L.POLICY_RATE_HZ).eval()
+    py, _, metrics, _ = python_episode(python_actor, "bickler", 4, 3.0)
+    cpp, stdout, _ = cpp_episode(path, "bickler", 4, 3.0, tmp_path)
+    np.testing.assert_allclose(cpp, py, rtol=0, atol=1e-5)
+    m = re.search(r"progress along the path\s+([-+0-9.eE]+)", stdout)
+    assert float(m.group(1)) == pytest.approx(metrics["progress"], abs=2e-3)
+    r = run_runtime("--policy", path, "--scenario", "bickler", "--seed", "1", "--duration", "1",
+                    "--soil", "m90", "--quiet")  # a chosen soil still wins
+    assert r.returncode == 0 and "scenario bickler on m90 seed 1 " in r.stdout, r.stdout
+
+
 def test_parity_with_stereo_elevation_map(exported, tmp_path, one_thread):
     # terrain_source="stereo": the elevation samples come from the map fused from ray-cast
     # StereoBM pairs (seed 004 §2.4); the C++ runtime (no Python) makes the Python path's decisions.

@@ -1,7 +1,9 @@
 """Gymnasium environments of seed 004 §4.5 (training scenarios) and §5 (evaluation courses).
 
 Registered ids (kwargs of ``gymnasium.make`` go to :class:`ErnestEnv`); each scenario's short name
-(``SCENARIOS``, what every command line takes) maps to one::
+(``SCENARIOS``, what every command line takes) maps to one. Each stands on its scenario's soil
+unless ``soil`` is given (``core.default_soil``: Table 2's dry sand for the Bickler trap, M90
+elsewhere; ``ernest_runtime`` takes the same)::
 
     ernest/RockField-v0  ernest/Step-v0  ernest/Ripples-v0  ernest/Slope-v0
     ernest/BicklerTrap-v0  ernest/SlopeEval-v0  ernest/WheelStep-v0  ernest/Course-v0
@@ -26,11 +28,6 @@ from .vector import ErnestVectorEnv, make_vec  # noqa: F401
 ENV_IDS = {env_id: name for name, env_id in SCENARIOS.items()}
 
 
-#: Keyword defaults of an id beyond its scenario (``gym.make`` and ``make_vec`` kwargs override
-#: them). The Bickler trap stands on Table 2's dry sand: the only ground on which its rocks give
-#: seed 004 §5.2's passive outcome at every friction of Table 3 (benchmarks/RESULTS.md, "Bickler
-#: trap").
-ENV_KWARGS = {"ernest/BicklerTrap-v0": {"soil": "dry_sand"}}
 
 
 def register_envs() -> None:
@@ -39,7 +36,7 @@ def register_envs() -> None:
     for env_id, scenario in ENV_IDS.items():
         if env_id not in gym.registry:
             gym.register(id=env_id, entry_point="ernest_cpp.envs.core:ErnestEnv",
-                         kwargs={"scenario": scenario, **ENV_KWARGS.get(env_id, {})},
+                         kwargs={"scenario": scenario},
                          disable_env_checker=True)
 
 

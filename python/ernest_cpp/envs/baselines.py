@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from .. import sensing
+from .._repr import arguments_repr, keeps_arguments
 
 _IDX = sensing.OBSERVATION_INDEX
 _SC = sensing.ObservationScales()
@@ -42,6 +43,9 @@ class PassiveController:
     """Drive straight at ``speed``; joint rates 0. Use with ``passive=True`` (the environment
     then holds the yaw brake and opens the clutch, so the bogie rolls freely)."""
 
+    __repr__ = arguments_repr
+
+    @keeps_arguments
     def __init__(self, speed: float = 0.2):
         if not 0.0 <= speed <= _LIM.vx_max:
             raise ValueError(f"speed = {speed} must be in [0, {_LIM.vx_max}] m/s")
@@ -94,6 +98,9 @@ class CrawlingGaitController:
     ``ernest reproduce`` and ``ernest slope-demo`` use these defaults.
     """
 
+    __repr__ = arguments_repr
+
+    @keeps_arguments
     def __init__(self, period: float = 6.0, yaw_amplitude_deg: float = 20.0,
                  roll_amplitude_deg: float = 6.0, speed: float = 0.2, align_time: float = 1.0,
                  k_track: float = 0.0, k_heading: float = 0.0, k_lateral: float = 0.0,
@@ -172,6 +179,9 @@ class LoadBalancingController:
     processed force–torque values, outside a deadband. Speed drops when the heading is far off.
     """
 
+    __repr__ = arguments_repr
+
+    @keeps_arguments
     def __init__(self, k_heading: float = 1.2, k_lateral: float = 0.6, max_steer_deg: float = 30.0,
                  k_yaw: float = 2.0, k_balance_deg_per_newton: float = 0.02,
                  balance_deadband: float = 40.0, speed: float = 0.2):

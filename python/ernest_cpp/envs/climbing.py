@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from .. import sensing
+from .._repr import arguments_repr, keeps_arguments
 from .baselines import POLICY_DT, _to_action
 
 _LIM = sensing.ActionLimits()
@@ -92,6 +93,9 @@ class PhaseGait:
     Bickler trap: the front wheels roll over the rocks, the rear wheels are the ones to lift).
     """
 
+    __repr__ = arguments_repr
+
+    @keeps_arguments
     def __init__(self, phases, trigger: float, k_joint: float = 1.8, k_heading: float = 0.8,
                  k_lateral: float = 0.3, max_steer_deg: float = 30.0, max_approach: float = 20.0,
                  trigger_wheels: str = "front", dt: float = POLICY_DT):
@@ -170,6 +174,7 @@ class BicklerCrossController(PhaseGait):
     over ``ernest/BicklerTrap-v0`` in 10 of 10 seeds at dt and dt / 4,
     ``benchmarks/tune_gait.py bickler``)."""
 
+    @keeps_arguments
     def __init__(self, phases=BICKLER_PHASES, trigger: float = BICKLER_TRIGGER, **kw):
         kw.setdefault("trigger_wheels", "rear")
         super().__init__(phases, trigger, **kw)
@@ -178,5 +183,6 @@ class BicklerCrossController(PhaseGait):
 class StepClimbController(PhaseGait):
     """The wheel-high step climb of §5.3 as a scripted phase gait (tuned defaults)."""
 
+    @keeps_arguments
     def __init__(self, phases=STEP_CLIMB_PHASES, trigger: float = STEP_CLIMB_TRIGGER, **kw):
         super().__init__(phases, trigger, **kw)

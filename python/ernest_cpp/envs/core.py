@@ -21,17 +21,14 @@ from .._core.envs import (  # noqa: F401  (re-exports: the C++ episode core, typ
     Scenario,
     ScenarioOptions,
     VecRoverEnv,
+    default_soil,
     generate_scenario,
     ripple_height,
     scenario_names,
 )
 from .. import sensing
+from .. import scenarios as _scenarios
 
-SCENARIO_ALIASES = {
-    "rockfield": "rockfield", "rock_field": "rockfield", "step": "step", "ripples": "ripples",
-    "slope": "slope", "bickler": "bickler", "bickler_trap": "bickler", "slope_eval": "slope_eval",
-    "wheel_step": "wheel_step", "course": "course", "flat": "flat",
-}
 
 
 @contextlib.contextmanager
@@ -84,7 +81,7 @@ def _optional_number(name: str, value, lo: float, hi: float, default: str, integ
                      f"{span}, or None for {default}")
 
 
-def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool = False,
+def make_options(scenario: str = "rockfield", soil: str | None = None, passive: bool = False,
                  physics_dt: float | None = None, slip_force_tolerance: float | None = None,
                  obstacle_substeps: int | None = None, episode_length: float | None = None,
                  rigid_ground: bool = False, eps_slip: float | None = _DEFAULTS.eps_slip,
@@ -94,6 +91,10 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
                  terrain_source: str = "truth", stereo=None,
                  reward: dict | None = None) -> _envs.EnvOptions:
     """EnvOptions from keyword arguments (the Gymnasium kwargs), validated.
+
+    ``soil``: a preset name ('dry_sand', 'm90', 'wet_sand'); None (the default) is the scenario's
+    own, ``default_soil(scenario)``: dry sand for the Bickler trap, M90 elsewhere (the same as
+    ``ernest_runtime --scenario`` without ``--soil``).
 
     ``physics_dt`` [s], ``slip_force_tolerance``, ``obstacle_substeps`` and ``episode_length`` [s]
     default to None: the simulator's step and settings, the scenario's episode length (30 s for
@@ -115,12 +116,14 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
     (defaults 2, 0.1, 1e-4: the paper's; it calls them tunable).
     """
     check_scenario(scenario)
+    if soil is None:
+        soil = default_soil(scenario)
     for name, value in (("soil", soil), ("terrain_source", terrain_source)):
         if not isinstance(value, str):
             raise TypeError(f"{name} = {value!r} must be a str")
     o = _envs.EnvOptions()
     sc = _envs.ScenarioOptions()
-    sc.kind = SCENARIO_ALIASES[scenario]
+    sc.kind = scenario
     for key, value in (randomisation or {}).items():
         if key == "kind" or not hasattr(sc, key):
             raise ValueError(f"randomisation has no field {key!r}")
@@ -154,8 +157,10 @@ def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool =
 
 
 def check_scenario(scenario) -> None:
-    if not isinstance(scenario, str) or scenario not in SCENARIO_ALIASES:
-        raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(sorted(SCENARIO_ALIASES))}")
+    """ValueError unless ``scenario`` is one of the short names of ``ernest_cpp.scenarios``
+    (the only names: no aliases), listing them."""
+    if not isinstance(scenario, str) or scenario not in _scenarios.SCENARIOS:
+        raise ValueError(f"scenario = {scenario!r}; allowed: {', '.join(_scenarios.SCENARIOS)}")
 
 
 def observation_layout(options: _envs.EnvOptions):
@@ -262,6 +267,21 @@ class ErnestEnv(gym.Env):
             self._live_view()
         return obs.astype(np.float32), {"episode_seed": self.core.episode_seed,
                                         "scenario": self.core.scenario.name}
+
+    def __repr__(self) -> str:
+        """``ErnestEnv('bickler', soil='dry_sand', passive=True)``: the scenario, its soil and
+        the environment's settings that differ from the defaults (``make_options``)."""
+        o, d = self.options, _DEFAULTS
+        parts = [repr(self.scenario_name), f"soil={o.soil!r}"]
+        for name, value, default in (
+                ("passive", o.passive, d.passive), ("rigid_ground", o.rigid_ground, d.rigid_ground),
+                ("physics_dt", o.physics_dt, d.physics_dt),
+                ("episode_length", o.episode_duration, d.episode_duration),
+                ("terrain_source", o.terrain_source, d.terrain_source),
+                ("render_mode", self.render_mode, None)):
+            if value != default:
+                parts.append(f"{name}={value!r}")
+        return f"ErnestEnv({', '.join(parts)})"
 
     def __getstate__(self):
         return {"scenario_name": self.scenario_name, "render_mode": self.render_mode,

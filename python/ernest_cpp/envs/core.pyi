@@ -13,7 +13,6 @@ from ..sensing import ActionLimits, ObservationScales, PathLine, RewardWeights
 
 Array = npt.NDArray[np.float64]
 
-SCENARIO_ALIASES: dict[str, str]
 RESET_OPTIONS: tuple[str, ...]
 
 class ScenarioOptions:
@@ -173,6 +172,7 @@ class VecRoverEnv:
 def generate_scenario(options: ScenarioOptions, seed: int) -> Scenario: ...
 def ripple_height(x: float, amplitude: float, wavelength: float, alpha: float) -> float: ...
 def scenario_names() -> list[str]: ...
+def default_soil(scenario: str) -> str: ...
 def make_options(scenario: str = "rockfield", soil: str = "m90", passive: bool = False,
                  physics_dt: float | None = None, slip_force_tolerance: float | None = None,
                  obstacle_substeps: int | None = None, episode_length: float | None = None,
