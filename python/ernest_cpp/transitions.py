@@ -20,6 +20,7 @@ import time
 import numpy as np
 
 from . import opt as O
+from ._csv import header
 from .findings import findings_markdown, paper_findings  # noqa: F401  (paper_findings: public)
 
 COLORS = {"bezier": "tab:blue", "spline": "tab:orange", "linear": "tab:green", "naive": "tab:red"}
@@ -30,6 +31,19 @@ CSV_COLUMNS = ("configuration", "strategy", "weights", "direction", "used", "t1"
                "res_start_pos", "res_start_vel", "res_end_pos", "res_end_vel", "cost",
                "max_violation", "solver_status", "evaluations", "solve_ms", "fell_back",
                "fallback_reason")
+#: Each column's unit, named in the CSV header (``t1 [s]``); joint residuals are the largest over
+#: the steering and roll joints (eqs 2–5); cost (eq 8) and max_violation (eqs 16–17, normalised
+#: by the joint limits) are pure numbers.
+CSV_UNITS = {
+    "configuration": "-", "strategy": "-", "weights": "-", "direction": "-", "used": "-",
+    "t1": "s", "duration_s": "s", "phase_shift_s": "s", "heading_change_deg": "deg",
+    "heading_deviation_deg": "deg", "position_deviation_m": "m", "distance_m": "m",
+    "max_acc_steering": "rad/s^2", "max_acc_roll": "rad/s^2", "energy_J": "J",
+    "energy_wheels_J": "J", "energy_articulation_J": "J", "cost_of_transport": "-",
+    "res_start_pos": "rad", "res_start_vel": "rad/s", "res_end_pos": "rad", "res_end_vel": "rad/s",
+    "cost": "-", "max_violation": "-", "solver_status": "-", "evaluations": "-", "solve_ms": "ms",
+    "fell_back": "-", "fallback_reason": "-",
+}
 
 
 def _atomic_path(path: str) -> str:
@@ -40,8 +54,8 @@ def _atomic_path(path: str) -> str:
 def write_csv(rows: list[dict], path: str) -> None:
     tmp = _atomic_path(path)
     with open(tmp, "w", newline="") as fh:
+        csv.writer(fh).writerow(header(CSV_COLUMNS, CSV_UNITS))
         w = csv.DictWriter(fh, fieldnames=CSV_COLUMNS, extrasaction="ignore")
-        w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
     os.replace(tmp, path)
@@ -227,3 +241,12 @@ def add_parser(sub) -> None:
     p.add_argument("--max-time", type=float, default=0.5, help="SLSQP budget per transition [s]")
     p.add_argument("--no-examples", action="store_true", help="skip the Figs 2–4 example plots")
     p.set_defaults(func=run)
+
+
+def main(**options) -> int:
+    """``ernest transitions`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest transitions --help``), checked as there (``cli.run``), e.g.
+    ``main(out="out/transitions", points=5)``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("transitions", **options)

@@ -169,5 +169,9 @@ def test_transitions_command_writes_outputs(tmp_path):
         assert (out / name).stat().st_size > 0, name
     lines = (out / "transitions.csv").read_text().strip().splitlines()
     assert len(lines) == 1 + 10 * 2  # header + 10 configurations x 2 directions x 1 point
+    head = lines[0].split(",")
+    assert all(" [" in h and h.endswith("]") for h in head), head  # every column names its unit
+    assert {"t1 [s]", "max_acc_steering [rad/s^2]", "cost [-]", "res_start_pos [rad]",
+            "res_end_vel [rad/s]", "solve_ms [ms]"} <= set(head)
     assert not list(out.glob("*.tmp*"))  # atomic writes leave no temporaries
     assert cli.main(["transitions", "--out", str(out), "--max-time", "-1"]) == 2

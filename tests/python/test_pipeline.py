@@ -10,6 +10,7 @@ import os
 import pytest
 import yaml
 
+from ernest_cpp._csv import bare
 from ernest_cpp.rl import pipeline as P
 from ernest_cpp.rl.export import load_policy
 
@@ -58,6 +59,16 @@ def test_pipeline_trains_consolidates_exports_and_resumes(tmp_path):
     assert "  consolidation seed 0: done" in again
 
 
+def _selection_rows(path: str) -> list[dict]:
+    """selection.csv's rows keyed by the bare column names; every header names its unit."""
+    with open(path, newline="") as fh:
+        reader = csv.DictReader(fh)
+        head = reader.fieldnames
+        assert all(h.endswith("]") and " [" in h for h in head), head
+        assert "candidate [-]" in head and "slope 18 m90 lateral [m]" in head, head
+        return [{bare(k): v for k, v in r.items()} for r in reader]
+
+
 def test_pipeline_selects_among_kept_agents_on_validation_episodes(tmp_path):
     cons = {"seeds": [0, 3], "set": ["consolidate.iterations=20", "consolidate.hidden=16",
                                       "consolidate.eval_episodes=1", "consolidate.batch_size=16",
@@ -70,13 +81,13 @@ def test_pipeline_selects_among_kept_agents_on_validation_episodes(tmp_path):
     out = cfg["out"]
     kept = {os.path.join(d, "checkpoints", n) for d in ("consolidated", "consolidated-s3")
             for n in ("iteration-00000010", "consolidated")}
-    rows = list(csv.DictReader(open(os.path.join(out, "selection.csv"))))
+    rows = _selection_rows(os.path.join(out, "selection.csv"))
     assert {r["candidate"] for r in rows[:-1]} == kept and rows[-1]["candidate"].startswith("crawl")
     crawl = rows[-1]
     for r in rows[:-1]:  # targets met on the validation episodes, as selection documents them
         slopes = ["slope 18 m90", "slope 18 wet_sand"]
         below = all(float(r[f"{k} TR"]) < float(crawl[f"{k} TR"]) for k in slopes)
-        tracked = all(float(r[f"{k} lateral [m]"]) <= 0.3 for k in slopes)
+        tracked = all(float(r[f"{k} lateral"]) <= 0.3 for k in slopes)
         step, trap = float(r["step crossed"]), float(r["trap crossed"])
         assert int(r["targets met"]) == (step >= 0.8) + (trap >= 0.8) + below + tracked
         assert float(r["crossings"]) == pytest.approx(step + trap)
@@ -125,7 +136,7 @@ def test_pipeline_refines_the_chosen_agent_and_chooses_again(tmp_path):
     assert first == os.path.join(out, "consolidated", "checkpoints", "consolidated")
     log = open(os.path.join(out, "refined.log")).read()
     assert f"continuing {first}" in log and "rewards relabelled to w_delta = 1" in log
-    rows = list(csv.DictReader(open(os.path.join(out, "refined", "selection.csv"))))
+    rows = _selection_rows(os.path.join(out, "refined", "selection.csv"))
     assert [r["candidate"] for r in rows[:-1]] == [
         os.path.join("..", "consolidated", "checkpoints", "consolidated"),  # the first choice
         os.path.join("checkpoints", "iteration-00000010"), os.path.join("checkpoints", "consolidated")]

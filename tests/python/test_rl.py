@@ -550,7 +550,11 @@ def test_console_commands_on_a_45_value_env(tmp_path, capsys):
                      "--set", "consolidate.eval_episodes=1", "--set",
                      "log.progress_bar=false"]) == 0
     with open(tmp_path / "cons" / "evaluation.csv") as fh:
-        assert len(fh.read().splitlines()) == 3
+        lines = fh.read().splitlines()
+    assert len(lines) == 3
+    head = lines[0].split(",")  # each column names its unit, as eval.csv's
+    assert set(head[:2]) == {"policy [-]", "env [-]"} and "return [-]" in head, head
+    assert all(h.endswith("]") and " [" in h for h in head), head
     capsys.readouterr()
     assert cli.main(["train", "--env", "ernest-toy/DoesNotExist-v0"]) == 2
     err = capsys.readouterr().err

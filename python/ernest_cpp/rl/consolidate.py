@@ -19,6 +19,7 @@ import numpy as np
 import torch
 
 from . import layout as L
+from .._csv import header as csv_header
 from ..sensing import RewardWeights as _RewardWeights
 from .replay import ReplayBuffer
 from .storage import AtomicDir
@@ -293,11 +294,13 @@ def evaluation_table(agent: TD3, specialists: list[dict], cfg: dict, out_dir: st
             rows.append({"policy": name, "env": env_id, **res})
             log(f"  {name:>20s} on {env_id}: return {res['return']:.3f}")
         env.close()
+    from .trainer import EVAL_UNITS
+
     keys = sorted({k for r in rows for k in r}, key=lambda k: (k not in ("policy", "env"), k))
     with open(os.path.join(out_dir, "evaluation.csv"), "w", newline="") as fh:
-        w = csv.DictWriter(fh, keys)
-        w.writeheader()
-        w.writerows(rows)
+        w = csv.writer(fh)  # each column's unit in its header, as eval.csv's ([?]: an info key's)
+        w.writerow(csv_header(keys, {"policy": "-", "env": "-", **EVAL_UNITS}, "?"))
+        w.writerows([r.get(k, "") for k in keys] for r in rows)
     return rows
 
 

@@ -35,6 +35,8 @@ import multiprocessing as mp
 
 import numpy as np
 
+from .._csv import header
+
 SOILS = ("m90", "wet_sand")
 
 
@@ -132,6 +134,13 @@ def score(res: dict, crawling: dict, sel: dict) -> dict:
             "slope TR mean": float(np.mean([res[k]["tr"] for k in slopes]))}
 
 
+def selection_units(keys) -> dict[str, str]:
+    """The unit of each ``selection.csv`` column (its header names it: ``step crossed [-]``,
+    ``slope 18 m90 lateral [m]``): the largest lateral deviation in metres, every other column a
+    pure number (fractions crossed, travel reductions, counts, names)."""
+    return {k: "m" if k.endswith(" lateral") else "-" for k in keys}
+
+
 def rank_key(row: dict) -> tuple:
     """Larger is better: targets met, then crossings, then the lower slope travel reduction."""
     return (row["targets met"], row["crossings"], -row["slope TR mean"])
@@ -197,8 +206,9 @@ def _iteration(path: str) -> int:
 def select_policy(dirs: list[str], sel: dict, out: str, log=print,
                   extra: list[str] | None = None) -> str:
     """Evaluate every candidate of the consolidation folders ``dirs`` (and the checkpoints
-    ``extra``); write ``out/selection.csv`` (all of them) and ``out/selected.json``; return the
-    chosen checkpoint."""
+    ``extra``); write ``out/selection.csv`` (all of them, each column's unit in its header:
+    ``selection_units``; the last row is the crawling gait's reference) and ``out/selected.json``;
+    return the chosen checkpoint."""
     from ..envs.baselines import CrawlingGaitController
 
     sel = check_select(sel)
@@ -219,7 +229,7 @@ def select_policy(dirs: list[str], sel: dict, out: str, log=print,
                     row[f"{label} crossed"] = v["crossed"]
                 else:
                     row[f"{label} TR"] = v["tr"]
-                    row[f"{label} lateral [m]"] = v["lat"]
+                    row[f"{label} lateral"] = v["lat"]
             rows.append(row)
             log(f"  {row['candidate']}: {row['targets met']} targets met, step "
                 f"{res['step']['crossed']:.2f}, trap {res['trap']['crossed']:.2f}"
@@ -228,13 +238,13 @@ def select_policy(dirs: list[str], sel: dict, out: str, log=print,
     best = max(rows, key=rank_key)
     crawl_row = {"candidate": "crawling gait (reference)"}
     for label, v in crawling.items():
-        crawl_row[f"{label} TR"], crawl_row[f"{label} lateral [m]"] = v["tr"], v["lat"]
+        crawl_row[f"{label} TR"], crawl_row[f"{label} lateral"] = v["tr"], v["lat"]
     keys = list(rows[0])
     tmp = os.path.join(out, "selection.csv.tmp")
     with open(tmp, "w", newline="") as fh:
-        w = csv.DictWriter(fh, keys, restval="", extrasaction="ignore")
-        w.writeheader()
-        w.writerows(rows + [crawl_row])
+        w = csv.writer(fh)
+        w.writerow(header(keys, selection_units(keys)))
+        w.writerows([r.get(k, "") for k in keys] for r in rows + [crawl_row])
     os.replace(tmp, os.path.join(out, "selection.csv"))
     chosen = os.path.normpath(os.path.join(out, best["candidate"]))
     tmp = os.path.join(out, "selected.json.tmp")
@@ -249,4 +259,4 @@ def select_policy(dirs: list[str], sel: dict, out: str, log=print,
 
 
 __all__ = ["select_policy", "check_select", "validation_courses", "course_results", "score",
-           "rank_key", "candidates"]
+           "rank_key", "candidates", "selection_units"]

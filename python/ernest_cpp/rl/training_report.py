@@ -13,7 +13,7 @@ from .._csv import bare
 def _selection_section(out: str, top: int = 10) -> list[str]:
     """The select stage's best candidates (``selection.csv``; the last row is the crawling gait's
     reference) with the chosen one marked."""
-    rows = _rows(os.path.join(out, "selection.csv"))
+    rows = _rows(os.path.join(out, "selection.csv"), bare_names=True)
     if len(rows) < 2:
         return []
     ref, rows = rows[-1], rows[:-1]
@@ -25,21 +25,22 @@ def _selection_section(out: str, top: int = 10) -> list[str]:
           f"travel reduction; the first row is the policy). Step and trap: fraction of "
           f"episodes crossed; slopes: travel reduction / largest lateral deviation [m]; "
           f"crawling gait: "
-          + ", ".join(f"{k} {_fmt(ref[k + ' TR'])} / {_fmt(ref[k + ' lateral [m]'])}"
+          + ", ".join(f"{k} {_fmt(ref[k + ' TR'])} / {_fmt(ref[k + ' lateral'])}"
                       for k in slopes) + ".", "",
           "| candidate | targets met | step | trap | " + " | ".join(slopes) + " |",
           "|---|---|---|---|" + "---|" * len(slopes)]
     for r in rows[:top]:
         md.append(f"| {r['candidate']} | {int(r['targets met'])} | {_fmt(r['step crossed'])} | "
                   f"{_fmt(r['trap crossed'])} | " + " | ".join(
-                      f"{_fmt(r[k + ' TR'])} / {_fmt(r[k + ' lateral [m]'])}" for k in slopes)
+                      f"{_fmt(r[k + ' TR'])} / {_fmt(r[k + ' lateral'])}" for k in slopes)
                   + " |")
     return md + [""]
 
 
 def _rows(path: str, bare_names: bool = False) -> list[dict]:
     """The rows of a CSV file, keyed by its headers or (``bare_names``) by the headers without
-    their units (eval.csv: 'return [-]' -> 'return')."""
+    their units (eval.csv: 'return [-]' -> 'return'; files written before the units were named
+    read the same)."""
     key = bare if bare_names else str
     try:
         with open(path, newline="") as fh:
@@ -104,9 +105,9 @@ def write_report(cfg: dict, out: str) -> str:
                       f"{_fmt(r.get('return'), 1)} | {_fmt(r.get('path_progress'))} | "
                       f"{_fmt(r.get('episode_metrics.travel_reduction'))} |")
         md.append("")
-    table = _rows(os.path.join(out, "evaluation.csv"))  # the selected agent's (select stage)
+    table = _rows(os.path.join(out, "evaluation.csv"), bare_names=True)  # the selected agent's
     if not table:
-        table = _rows(os.path.join(out, "consolidated", "evaluation.csv"))
+        table = _rows(os.path.join(out, "consolidated", "evaluation.csv"), bare_names=True)
     if table:
         md += ["## Consolidated policy against every specialist", "",
                "| environment | policy | return | progress [m] | travel reduction |",
