@@ -232,8 +232,8 @@ def test_walker_cycle_recording(tmp_path):
     from ernest_cpp.viewer.walker import cycle_recording, convex_hull
 
     model = W.WalkerModel(W.sdm_b_parameters())
-    boxes, terrain, _ = FC.rock_world(model, seed=3, rocks=60)
-    r = FC.run(model, terrain, boxes, FC.cycle_options(frame_interval=0.5))
+    boxes, terrain, _ = FC.rock_world(model, seed=3, rocks=20)  # small and coarse: quick
+    r = FC.run(model, terrain, boxes, FC.cycle_options(cell=0.05, frame_interval=0.5))
     path = save_recording(cycle_recording(model, r, boxes, terrain, seed=3),
                           str(tmp_path / "walker.npz"))
     rec = load_recording(path)
