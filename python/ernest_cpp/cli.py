@@ -35,6 +35,62 @@ def build_parser() -> tuple[argparse.ArgumentParser, argparse._SubParsersAction]
     return parser, sub
 
 
+def command_argv(command: str, **options) -> list[str]:
+    """The command line ``ernest COMMAND ...`` for keyword options: each keyword is an option's
+    name with underscores (``out="x"`` -> ``--out x``, ``no_video=True`` -> ``--no-video``,
+    ``scenario=["step", "bickler"]`` -> ``--scenario step --scenario bickler``, positional
+    arguments by their name: ``runs=["runs/a"]``); None leaves an option at its default. An
+    unknown command or keyword raises TypeError naming the known ones."""
+    _, sub = build_parser()
+    if command not in sub.choices:
+        raise TypeError(f"unknown command {command!r}; commands: {', '.join(sub.choices)}")
+    actions = {a.dest: a for a in sub.choices[command]._actions
+               if a.dest not in ("help", argparse.SUPPRESS)}
+    unknown = sorted(set(options) - set(actions))
+    if unknown:
+        raise TypeError(f"ernest {command}: unknown keyword(s) {', '.join(unknown)}; known: "
+                        f"{', '.join(sorted(actions))}")
+    argv, positional = [command], []
+    for dest, value in options.items():
+        action = actions[dest]
+        if value is None:
+            continue
+        values = [str(v) for v in value] if isinstance(value, (list, tuple)) else [str(value)]
+        if not action.option_strings:  # a positional argument
+            positional += values
+        elif action.nargs == 0:  # a flag (store_true): given when True
+            if not isinstance(value, bool):
+                raise TypeError(f"ernest {command}: {dest} = {value!r} must be True or False")
+            if value:
+                argv.append(action.option_strings[-1])
+        elif isinstance(action, argparse._AppendAction):
+            for v in values:
+                argv += [action.option_strings[-1], v]
+        else:
+            argv += [action.option_strings[-1], *values]
+    return argv + (["--", *positional] if positional else [])
+
+
+def run(command: str, **options) -> int:
+    """``ernest COMMAND`` from Python with keyword arguments (``command_argv``), e.g.
+    ``cli.run("evaluate", out="out/report", scenario=["bickler"], no_video=True)``. The options are
+    checked as on the command line; a bad value raises ValueError with the command's message, and
+    the command's own errors propagate (no exit, no one-line report). Returns the exit status."""
+    import contextlib
+    import io
+
+    argv = command_argv(command, **options)
+    parser, _ = build_parser()
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            args = parser.parse_args(argv)
+    except SystemExit:
+        lines = err.getvalue().strip().splitlines()
+        raise ValueError(lines[-1] if lines else f"ernest {command}: invalid options") from None
+    return int(args.func(args) or 0)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser, sub = build_parser()
     args, unknown = parser.parse_known_args(argv)

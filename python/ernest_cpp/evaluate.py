@@ -141,6 +141,16 @@ def courses(scenarios=None) -> list[tuple[str, str, dict]]:
     return out
 
 
+def video_course(runs: list[tuple[str, str, dict]]) -> tuple[str, str, dict]:
+    """The (label, env id, kwargs) the animation records: the mixed course when every course runs
+    (``runs`` is ``COURSES``), else the first of the chosen scenarios' courses, with its kwargs
+    (e.g. the wet-sand slope's soil). The GIF is named after its scenario (``course.gif``,
+    ``bickler.gif``)."""
+    if runs == COURSES:
+        return next(c for c in COURSES if c[1] == "ernest/Course-v0")
+    return runs[0]
+
+
 def _plots(results, out_dir: str) -> list[str]:
     import matplotlib
 
@@ -300,9 +310,10 @@ def run(args: argparse.Namespace) -> int:
 
         name = LEARNED if LEARNED in ctrls else CRAWLING
         policy, passive = ctrls[name]
-        env = gym.make("ernest/Course-v0", passive=passive, render_mode="rgb_array")
-        video = os.path.join(args.out, "course.gif")
-        print(f"recording {name} on the mixed course -> {video}", flush=True)
+        label, env_id, kwargs = video_course(runs)
+        env = gym.make(env_id, passive=passive, render_mode="rgb_array", **kwargs)
+        video = os.path.join(args.out, f"{scenario_name(env_id)}.gif")
+        print(f"recording {name} on {label} -> {video}", flush=True)
         record_episode(env.unwrapped, policy, video, seed=args.seed, every=3, max_steps=160)
         lines += ["", f"Animation: [{os.path.basename(video)}]({os.path.basename(video)})"]
     report = os.path.join(args.out, "report.md")
@@ -331,3 +342,12 @@ def add_parser(sub) -> None:
 
     backend_args(p)  # --backend ray: the episodes as tasks on a Ray cluster
     p.set_defaults(func=run)
+
+
+def main(**options) -> int:
+    """``ernest evaluate`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest evaluate --help``), checked as there (``cli.run``), e.g.
+    ``main(out="out/report", scenario=["bickler"], no_video=True)``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("evaluate", **options)

@@ -199,3 +199,12 @@ def _main(args: argparse.Namespace) -> int:
           f"{len(list(args.out.glob('*.png')))} PNGs (cycle {'completed' if c['completed'] else 'stopped'}, "
           f"min wheel-rock clearance {100 * c['min_rock_clearance']:.1f} cm, {r['seconds']:.1f} s)")
     return 0
+
+
+def main(**options) -> int:
+    """``ernest footfall`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest footfall --help``), checked as there (``cli.run``), e.g.
+    ``main(out="out/footfall")``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("footfall", **options)

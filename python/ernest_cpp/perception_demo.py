@@ -181,3 +181,12 @@ def add_parser(subparsers) -> None:
 def main_args(args: argparse.Namespace) -> int:
     run(args.scenario, args.out, args.frames, args.seed, args.algorithm)
     return 0
+
+
+def main(**options) -> int:
+    """``ernest perception`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest perception --help``), checked as there (``cli.run``), e.g.
+    ``main(scenario="rockfield", out="out/perception")``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("perception", **options)

@@ -775,3 +775,12 @@ def add_parser(sub) -> None:
     p.add_argument("--quick", action="store_true",
                    help="cheap run: 20 s episodes, 1 switch point, 0.1 s budget, 19 slips")
     p.set_defaults(func=run, policy_given=False)
+
+
+def main(**options) -> int:
+    """``ernest reproduce`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest reproduce --help``), checked as there (``cli.run``), e.g.
+    ``main(out="out/reproduce")``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("reproduce", **options)

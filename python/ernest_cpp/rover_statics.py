@@ -339,3 +339,12 @@ def add_parser(subparsers) -> None:
     p.add_argument("--stride", type=float, default=0.5,
                    help="foot advance per cycle of the sway gait [m] (default 0.5)")
     p.set_defaults(func=main_args)
+
+
+def main(**options) -> int:
+    """``ernest statics`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest statics --help``), checked as there (``cli.run``), e.g.
+    ``main(out="out/statics", steps="stability,sag")``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("statics", **options)

@@ -222,3 +222,12 @@ def add_parser(subparsers) -> None:
                    help="eq 12 slip regularisation [(m/s)^-2] (default: the environments' 1e4; "
                         "Table 2's is 100)")
     p.set_defaults(func=main_args)
+
+
+def main(**options) -> int:
+    """``ernest slope-demo`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest slope-demo --help``), checked as there (``cli.run``), e.g.
+    ``main(out="out/dynamics")``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("slope-demo", **options)

@@ -123,3 +123,12 @@ def add_parser(sub) -> None:
     p.add_argument("--points", type=int, default=73, help="slip samples in [-0.9, 0.9]")
     p.add_argument("--carriage-speed", type=float, default=0.2, help="rig carriage speed [m/s]")
     p.set_defaults(func=run)
+
+
+def main(**options) -> int:
+    """``ernest soil-curves`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest soil-curves --help``), checked as there (``cli.run``), e.g.
+    ``main(out="out/soil")``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("soil-curves", **options)

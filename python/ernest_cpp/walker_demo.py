@@ -221,3 +221,12 @@ def _main(args: argparse.Namespace) -> int:
     run(args.out, args.stride)
     print(f"wrote {args.out}/fig16_lifted_legs.png, fig15_sway_gait.png, walker_report.md")
     return 0
+
+
+def main(**options) -> int:
+    """``ernest walker`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest walker --help``), checked as there (``cli.run``), e.g.
+    ``main(out="out/walker")``. Returns the exit status; errors raise."""
+    from .cli import run
+
+    return run("walker", **options)

@@ -124,3 +124,58 @@ def test_resume_with_no_more_steps_than_done_names_both_counts(tmp_path, capsys)
                          ([], "total_steps 200 (the run's saved settings)")):
         assert cli.main(["train", "--run-dir", run, "--resume", *extra]) == 2
         _one_line_error(capsys, given, "has done 200 transitions already", "--steps above 200")
+
+
+# The Python API behind each command: a keyword entry point that takes the command's options by
+# name (README, "Every command from Python"); cli.run takes any command by name.
+ENTRY_POINTS = {
+    "soil-curves": "ernest_cpp.soil_curves:main", "evaluate": "ernest_cpp.evaluate:main",
+    "transitions": "ernest_cpp.transitions:main", "slope-demo": "ernest_cpp.slope_demo:main",
+    "reproduce": "ernest_cpp.reproduce:main", "statics": "ernest_cpp.rover_statics:main",
+    "walker": "ernest_cpp.walker_demo:main", "perception": "ernest_cpp.perception_demo:main",
+    "footfall": "ernest_cpp.footfall_demo:main", "train": "ernest_cpp.rl.commands:train",
+    "consolidate": "ernest_cpp.rl.commands:consolidate",
+    "export": "ernest_cpp.rl.commands:export_policy",
+    "stamp-policy": "ernest_cpp.rl.commands:stamp",
+    "train-default": "ernest_cpp.rl.pipeline:train_default",
+}
+
+
+def test_every_command_has_a_keyword_entry_point():
+    import importlib
+
+    _, sub = cli.build_parser()
+    assert set(ENTRY_POINTS) <= set(sub.choices)
+    for command in sub.choices:  # any command, also by name
+        assert cli.command_argv(command) == [command]
+    for command, target in ENTRY_POINTS.items():
+        module, name = target.split(":")
+        fn = getattr(importlib.import_module(module), name)
+        assert f"``ernest {command}``" in fn.__doc__, target
+
+
+def test_keyword_options_map_to_the_command_line():
+    argv = cli.command_argv("evaluate", out="o", scenario=["step", "bickler"], no_video=True,
+                            policy=None, seed=3)
+    assert argv == ["evaluate", "--out", "o", "--scenario", "step", "--scenario", "bickler",
+                    "--no-video", "--seed", "3"]
+    assert cli.command_argv("consolidate", runs=["a", "b"], out="c", set=["seed=1"]) == [
+        "consolidate", "--out", "c", "--set", "seed=1", "--", "a", "b"]
+    with pytest.raises(TypeError, match="unknown keyword.*outt.*known: .*out"):
+        cli.command_argv("evaluate", outt="o")
+    with pytest.raises(TypeError, match="unknown command 'evaluat'"):
+        cli.command_argv("evaluat")
+    with pytest.raises(TypeError, match="no_video = 'yes' must be True or False"):
+        cli.command_argv("evaluate", no_video="yes")
+
+
+def test_a_command_runs_from_python_with_keywords(capsys):
+    from ernest_cpp.rl import commands
+
+    assert commands.train(scenario="step", print_config=True, set=["td3.hidden=32"]) == 0
+    out = capsys.readouterr().out
+    assert "scenario: step" in out and "hidden: 32" in out
+    with pytest.raises(ValueError, match="--seed"):  # checked as on the command line
+        commands.train(scenario="step", seed=-1, print_config=True)
+    with pytest.raises(ValueError, match="invalid choice: 'rock_field'"):
+        commands.train(scenario="rock_field", print_config=True)

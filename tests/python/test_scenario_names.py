@@ -28,6 +28,14 @@ def test_the_table_is_the_cores_names_and_the_registered_ids():
         scenario_env_id("BicklerTrap-v0")
 
 
+@pytest.mark.parametrize("alias", ["rock_field", "bickler_trap", "RockField-v0", "Bickler"])
+def test_the_env_refuses_other_names_listing_the_short_ones(alias):
+    with pytest.raises(ValueError, match="allowed: rockfield, step, ripples, slope, bickler"):
+        E.ErnestEnv(alias)
+    with pytest.raises(ValueError, match="allowed: rockfield"):
+        E.make_options(alias)
+
+
 def test_train_takes_every_short_name(capsys):
     for name, env_id in SCENARIOS.items():
         assert resolve_env_id({"scenario": name}) == env_id
@@ -57,3 +65,22 @@ def test_runtime_offers_the_same_names():
     out = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=60).stdout
     line = next(ln for ln in out.splitlines() if ln.startswith("scenarios:"))
     assert sorted(line.split()[1:]) == sorted(SCENARIOS)
+
+
+def test_evaluate_records_the_animation_on_the_chosen_scenario(tmp_path, monkeypatch):
+    from ernest_cpp.envs import render
+
+    assert evaluate.video_course(evaluate.COURSES)[1] == "ernest/Course-v0"  # all: mixed course
+    assert evaluate.video_course(evaluate.courses(["slope_eval", "bickler"])) == evaluate.COURSES[1]
+    recorded = []
+
+    def record(env, policy, path, **kwargs):  # the recording itself is render.py's, tested there
+        recorded.append((env.scenario_name, env.options.soil, os.path.basename(path)))
+        open(path, "wb").close()
+
+    monkeypatch.setattr(render, "record_episode", record)
+    # the keyword entry point of `ernest evaluate --scenario bickler --out ...`
+    assert evaluate.main(out=str(tmp_path), scenario=["bickler"]) == 0
+    assert recorded == [("bickler", "dry_sand", "bickler.gif")]
+    assert not (tmp_path / "course.gif").exists()
+    assert "(bickler.gif)" in (tmp_path / "report.md").read_text()

@@ -270,3 +270,39 @@ def add_parser(subparsers) -> None:
                               "it has is refused.")
     p.add_argument("policy", help="exported .pt file")
     p.set_defaults(func=_stamp)
+
+
+def train(**options) -> int:
+    """``ernest train`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest train --help``), checked as there (``cli.run``), e.g.
+    ``train(scenario="slope", preset="quick", set=["td3.hidden=256"])``. Returns the exit status; errors raise."""
+    from ..cli import run
+
+    return run("train", **options)
+
+
+def consolidate(**options) -> int:
+    """``ernest consolidate`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest consolidate --help``), checked as there (``cli.run``), e.g.
+    ``consolidate(runs=["runs/slope", "runs/step"], out="runs/cons")``. Returns the exit status; errors raise."""
+    from ..cli import run
+
+    return run("consolidate", **options)
+
+
+def export_policy(**options) -> int:
+    """``ernest export`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest export --help``), checked as there (``cli.run``), e.g.
+    ``export_policy(checkpoint="runs/cons", out="policy.pt")``. Returns the exit status; errors raise."""
+    from ..cli import run
+
+    return run("export", **options)
+
+
+def stamp(**options) -> int:
+    """``ernest stamp-policy`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest stamp-policy --help``), checked as there (``cli.run``), e.g.
+    ``stamp(policy="old_policy.pt")``. Returns the exit status; errors raise."""
+    from ..cli import run
+
+    return run("stamp-policy", **options)

@@ -407,3 +407,12 @@ if __name__ == "__main__":
     add_parser(parser.add_subparsers(dest="command", required=True))
     a = parser.parse_args()
     sys.exit(a.func(a))
+
+
+def train_default(**options) -> int:
+    """``ernest train-default`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest train-default --help``), checked as there (``cli.run``), e.g.
+    ``train_default(stages="report")``. Returns the exit status; errors raise."""
+    from ..cli import run
+
+    return run("train-default", **options)
