@@ -260,3 +260,14 @@ def test_footfall_takes_record():
     parser, sub = cli.build_parser()
     args = parser.parse_args(["footfall", "--record"])
     assert args.record is True
+
+
+def test_live_view_port_from_the_environment(monkeypatch):
+    from ernest_cpp.viewer.app import LiveViewer
+
+    for bad in ("http", "-1", "70000"):
+        monkeypatch.setenv("ERNEST_VIEWER_PORT", bad)
+        with pytest.raises(ValueError, match="ERNEST_VIEWER_PORT"):
+            LiveViewer.from_environment()
+    with pytest.raises(ValueError, match="max_fps"):
+        LiveViewer(port=0, max_fps=0)

@@ -323,11 +323,9 @@ class ErnestEnv(gym.Env):
         """render_mode "human": the state goes to the browser's live 3D view (ernest_cpp.viewer;
         port ERNEST_VIEWER_PORT, default 8080); a slow or closed browser never delays the step."""
         if getattr(self, "_viewer", None) is None:
-            import os
-
             from ..viewer.app import LiveViewer
 
-            self._viewer = LiveViewer(port=int(os.environ.get("ERNEST_VIEWER_PORT", "8080")))
+            self._viewer = LiveViewer.from_environment()
         self._viewer.push(self)
 
     def close(self):

@@ -218,6 +218,22 @@ class LiveViewer:
         self._thread.start()
         print(f"ernest viewer: live view at {self.url}", flush=True)
 
+    @classmethod
+    def from_environment(cls) -> "LiveViewer":
+        """A live viewer on port ERNEST_VIEWER_PORT (default 8080; 0: any free port; a taken
+        port moves on to the next free one)."""
+        import os
+
+        text = os.environ.get("ERNEST_VIEWER_PORT", "8080")
+        try:
+            port = int(text)
+        except ValueError:
+            raise ValueError(f"ERNEST_VIEWER_PORT = {text!r} must be an integer port in "
+                             "[0, 65535]") from None
+        if not 0 <= port <= 65535:
+            raise ValueError(f"ERNEST_VIEWER_PORT = {port} must be in [0, 65535] (0: any free)")
+        return cls(port=port)
+
     def push(self, env) -> None:
         """Queue the environment's current state (replacing any frame not yet sent)."""
         u = getattr(env, "unwrapped", env)

@@ -45,6 +45,12 @@ def run(args: argparse.Namespace) -> int:
     from .recording import load_recording
 
     rec = load_recording(args.recording)  # a missing or damaged file: one line naming it
+    if args.screenshot:
+        from . import browser
+
+        if browser.find_chromium() is None:
+            raise ValueError("--screenshot needs chromium and chromedriver (Debian: apt-get "
+                             "install chromium chromium-driver)")
     from .app import Player
 
     print(f"loading {args.recording}: {rec.meta.get('scenario', '?')}, {len(rec)} frames, "
