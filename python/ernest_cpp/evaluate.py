@@ -291,6 +291,9 @@ def run(args: argparse.Namespace) -> int:
                   f"travel reduction {100 * metrics['travel_reduction']:5.1f} % "
                   f"CoT {metrics['cost_of_transport']:7.3f}  ({info['message']}, "
                   f"{time.perf_counter() - t0:.1f} s)", flush=True)
+    if getattr(args, "record", False):
+        print(f"wrote {total} recordings to {os.path.join(args.out, 'recordings')} "
+              "(ernest view FILE)", flush=True)
     lines = ["# ERNEST evaluation report", "",
              f"Seed {args.seed}. Travel reduction = 1 - progress / no-slip travel (seed 004 Table 6); "
              "cost of transport = electrical energy of all six actuators (eq 40) / (m g progress).", "",

@@ -137,6 +137,7 @@ def test_evaluate_record_writes_recordings(tmp_path, capsys):
     out = tmp_path / "report"
     assert cli.main(["evaluate", "--out", str(out), "--scenario", "wheel_step", "--no-video",
                      "--record"]) == 0
+    assert f"wrote 2 recordings to {out / 'recordings'}" in capsys.readouterr().out
     files = sorted(os.listdir(out / "recordings"))
     assert files == ["wheel_high_step_m90_crawling_gait.npz", "wheel_high_step_m90_passive_bogie.npz"]
     rec = load_recording(str(out / "recordings" / files[0]))
