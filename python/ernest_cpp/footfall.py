@@ -1,7 +1,8 @@
 """FootFall single-leg planning for the wheel-on-leg walker (seed 003 §3.3–3.4, §4.1, §5.1):
 reachability and stability maps of one leg over a digital elevation map, OMPL's SBL in the
 leg's joint space with lazy bisection edge checks (FCL self and terrain collisions), FootFall's
-Dijkstra–bisection path smoothing, and steps planned against the sagged pose the compliance model
+Dijkstra–bisection path smoothing (by length, or by peak joint torque, §7.1), torque-aware maps
+(StabilityMapOptions.max_saturation, CellStatus.Overloaded), and steps planned against the sagged pose the compliance model
 predicts. The work is done in C++ (``ernest_cpp._core.footfall``); this module re-exports it and
 adds numpy views and plots (matplotlib, Agg).
 
@@ -26,17 +27,20 @@ from ._core.footfall import (  # noqa: F401  (re-exports)
     PlanResult,
     PlanStatus,
     RockFieldOptions,
+    SmoothingObjective,
     SmoothingOptions,
     SmoothingResult,
     StabilityCriterion,
     StabilityMap,
     StabilityMapOptions,
     StabilityMapper,
+    StanceTorques,
     StepOptions,
     StepPlan,
     SwingSag,
     SwingSagOptions,
     TerrainCell,
+    TorquePeak,
     default_clearance_table,
     first_colliding_edge,
     path_length,
@@ -45,6 +49,7 @@ from ._core.footfall import (  # noqa: F401  (re-exports)
     rock_field,
     sample_waypoints,
     smooth_path,
+    smooth_path_for_torque,
     terrain_from_arrays,
     terrain_from_map,
 )
@@ -53,11 +58,12 @@ __all__ = [
     "CellEvaluation", "CellStatus", "CollisionOptions", "LegCollisionChecker", "LegPlanner",
     "MapTerrain", "MapTerrainOptions", "PlannerOptions", "PlannerType", "PlanResult", "PlanStatus",
     "RockFieldOptions",
-    "SmoothingOptions", "SmoothingResult", "StabilityCriterion", "StabilityMap",
-    "StabilityMapOptions", "StabilityMapper", "StepOptions", "StepPlan", "SwingSag",
+    "SmoothingObjective", "SmoothingOptions", "SmoothingResult", "StabilityCriterion", "StabilityMap",
+    "StabilityMapOptions", "StabilityMapper", "StanceTorques", "StepOptions", "StepPlan", "SwingSag",
     "SwingSagOptions", "default_clearance_table", "first_colliding_edge", "map_arrays",
     "path_length", "plan_step", "plot_leg_path", "plot_stability_map", "predict_swing_sag",
-    "rock_field", "sample_waypoints", "smooth_path", "stability_map", "TerrainCell",
+    "rock_field", "sample_waypoints", "smooth_path", "smooth_path_for_torque", "stability_map", "TerrainCell",
+    "TorquePeak",
     "terrain_from_arrays", "terrain_from_map",
 ]
 

@@ -16,6 +16,7 @@ class CellStatus(Enum):
     Unreachable = ...
     Unstable = ...
     Stable = ...
+    Overloaded = ...
 
 class PlannerType(Enum):
     SBL = ...
@@ -42,6 +43,8 @@ class StabilityMapOptions:
     criterion: StabilityCriterion
     slope_threshold: float
     ik_evaluations: int
+    torques: bool
+    max_saturation: float
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
@@ -56,6 +59,8 @@ class StabilityMap:
     hip: Array
     reach: float
     ik_solves: int
+    saturation: Array
+    lift_saturation: float
     def count(self, status: CellStatus) -> int: ...
 
 class CellEvaluation:
@@ -64,6 +69,11 @@ class CellEvaluation:
     q: Array
     q_above: Array
     cg: Array
+    saturation_down: float
+    saturation_lifted: float
+    saturation: float
+    peak_leg: int
+    peak_joint: int
 
 class StabilityMapper:
     nesm: bool
@@ -110,11 +120,18 @@ class LegPlanner:
     def plan(self, start: Array, goal: Array) -> PlanResult: ...
     def simplify_with_ompl(self, path: Array) -> Array: ...
 
+class SmoothingObjective(Enum):
+    Length = ...
+    PeakTorque = ...
+
 class SmoothingOptions:
     epsilon: float
     min_improvement: float
     max_iterations: int
     max_nodes: int
+    objective: SmoothingObjective
+    torque_resolution: float
+    torque_tolerance: float
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
@@ -125,8 +142,26 @@ class SmoothingResult:
     iterations: int
     edge_checks: int
     seconds: float
+    initial_peak_saturation: float
+    peak_saturation: float
 
 def smooth_path(checker: LegCollisionChecker, path: Array, options: SmoothingOptions = ...) -> SmoothingResult: ...
+
+class TorquePeak:
+    saturation: float
+    leg: int
+    joint: int
+
+class StanceTorques:
+    leg: int
+    def __init__(self, model: Any, body: Array, q: Array, leg: int) -> None: ...
+    def down(self, q_leg: Array) -> TorquePeak: ...
+    def lifted(self, q_leg: Array) -> TorquePeak: ...
+    def lifted_segment(self, a: Array, b: Array, resolution: float = ...) -> TorquePeak: ...
+    def lifted_path(self, path: Array, resolution: float = ...) -> TorquePeak: ...
+
+def smooth_path_for_torque(checker: LegCollisionChecker, torques: StanceTorques, path: Array,
+                           options: SmoothingOptions = ...) -> SmoothingResult: ...
 
 class SwingSagOptions:
     stiffness: float
@@ -163,6 +198,8 @@ class StepPlan:
     planning_body: Array
     goal: Array
     goal_margin: float
+    goal_saturation: float
+    path_saturation: float
     q_start: Array
     q_start_above: Array
     q_goal_above: Array

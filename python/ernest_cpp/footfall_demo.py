@@ -82,8 +82,12 @@ def run(out: Path, seed: int = 3, cell: float = 0.02, rocks: int = 60, variants:
     log(f"[footfall] self-imaging: IoU >= {selfimage['min_iou']:.3f} on {len(selfimage['poses'])} poses, false obstacle "
         f"{100 * selfimage['false_obstacle_before_m']:.0f} cm -> {100 * selfimage['false_obstacle_after_m']:.1f} cm "
         f"({time.perf_counter() - t0:.1f} s)")
-    result = {"cycle": cycle, "gait": gait, "selfimage": selfimage, "seed": seed, "cell_m": cell, "rocks": rocks,
-              "seconds": time.perf_counter() - t_all}
+    log("[footfall] torque-aware footholds: the cycle planned by today's and the torque-aware planner (§7.1) ...")
+    from . import footfall_torque
+
+    torque = footfall_torque.demo(out, seed=seed, cell=cell, rocks=rocks, log=log)
+    result = {"cycle": cycle, "gait": gait, "selfimage": selfimage, "torque": torque, "seed": seed, "cell_m": cell,
+              "rocks": rocks, "seconds": time.perf_counter() - t_all}
     (out / "footfall.json").write_text(json.dumps(result, indent=2))
     _report(out, result)
     return result
@@ -160,6 +164,9 @@ def _report(out: Path, r: dict) -> None:
               f"{100 * g['compensated_executed_clearance']:.2f} |", "",
               f"Simulator sag vs the sag model: {1e3 * g['sag_error_six']:.2f} mm (six feet down), "
               f"{1e3 * g['sag_error_lifted']:.2f} mm (leg lifted). ![gait](footfall_gait.png)", ""]
+    from . import footfall_torque
+
+    lines += footfall_torque.report_lines(r["torque"])
     si = r["selfimage"]
     lines += ["## Self-imaging (§4.3, §5.2)", "",
               f"A raised leg seen by the hazard camera, removed by watershed segmentation of the depth map before "

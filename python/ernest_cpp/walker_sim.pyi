@@ -201,6 +201,8 @@ class FootfallCycleOptions:
     max_candidates: int
     candidate_spacing: float
     settle_time: float
+    torque_preference: float
+    execute: bool
     steps: int
     step: StepOptions
     sim: WalkerSimOptions

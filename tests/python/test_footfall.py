@@ -98,6 +98,12 @@ def test_footfall_command_small(tmp_path):
     assert 10_000 < gif.stat().st_size < 3_000_000 and gif.read_bytes()[:6] == b"GIF89a"
     assert (out / "footfall_cycle_maps.png").stat().st_size > 20_000
     assert "| step | leg |" in (out / "footfall_report.md").read_text()
+    # §7.1: the torque-aware planner picks no foothold over its limit; today's does with a payload
+    t = r["torque"]
+    assert t["nominal"]["torque_aware"]["over_limit"] == 0 and t["payload"]["torque_aware"]["over_limit"] == 0
+    assert t["payload"]["today"]["over_limit"] > 0
+    assert (out / "footfall_torque.png").stat().st_size > 20_000
+    assert "## Torque-aware footholds" in (out / "footfall_report.md").read_text()
 
 
 def test_cycle_world_is_one_rock_field():
