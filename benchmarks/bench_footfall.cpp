@@ -5,7 +5,10 @@
 //    same-run reference,
 //  * the Dijkstra–bisection smoother (§3.4.2, target ≤ 50 ms median, shorter paths) against OMPL's
 //    PathSimplifier::simplifyMax on the same plans (length, time),
-//  * a dense re-check (1e-3 rad, zero clearance) of every returned path.
+//  * a dense re-check (1e-3 rad, zero clearance) of every returned path,
+//  * the torque-aware map (§7.1: every cell's peak joint torque, target ≤ 0.5 s as the plain map)
+//    and the peak-torque smoother against the length smoother on the same plans (peak |tau| /
+//    limit along the path with the leg in the air, length, time).
 // Medians; `./run bench footfall` (then benchmarks/bench_footfall.py, the Python-side timings).
 // Arguments: [queries (60)] [SBL range, rad (PlannerOptions' default)]; FOOTFALL_VERBOSE=1 prints
 // every hard query (wall and CPU times, nodes, rounds, checks), FOOTFALL_ONLY=k runs query k only.
@@ -21,6 +24,8 @@
 #include "ernest/footfall/path_smoothing.hpp"
 #include "ernest/footfall/scenario.hpp"
 #include "ernest/footfall/stability_map.hpp"
+#include "ernest/footfall/stance_torque.hpp"
+#include "ernest/footfall/torque_smoothing.hpp"
 
 using namespace ernest::footfall;
 using ernest::bench::Clock;
@@ -72,6 +77,24 @@ int main(int argc, char** argv) {
               map.count(CellStatus::kStable), map.count(CellStatus::kUnstable), map.count(CellStatus::kUnreachable),
               map.ik_solves, map.nesm ? "NESM" : "SSM");
 
+  // 1b. The torque-aware map (§7.1): the same map with every reachable cell's peak joint torque.
+  StabilityMapOptions to = mo;
+  to.torques = true;
+  to.max_saturation = 0.85;
+  std::vector<double> tt;
+  StabilityMap tmap;
+  for (int r = 0; r < 5; ++r) {
+    const auto t0 = Clock::now();
+    StabilityMapper mapper(model, terrain, body, q, leg, to);
+    tmap = mapper.map();
+    tt.push_back(seconds_since(t0));
+  }
+  std::printf("torque-aware map (peak joint torque per cell, max_saturation %.2f): %.3f s median  (target <= 0.5 s;"
+              " plain map %.3f s)\n", to.max_saturation, median(tt), median(tm));
+  std::printf("  stable %d, overloaded %d, unstable %d cells; leg lifted above its foot: %.3f of a limit\n",
+              tmap.count(CellStatus::kStable), tmap.count(CellStatus::kOverloaded), tmap.count(CellStatus::kUnstable),
+              tmap.lift_saturation);
+
   // 2. Random feasible queries (§3.4.1).
   StabilityMapper mapper(model, terrain, body, q, leg, mo);
   LegCollisionChecker checker(model, terrain, body, q, leg);
@@ -83,6 +106,9 @@ int main(int argc, char** argv) {
   PlannerOptions po;
   po.time_limit = 1.0;
   if (argc > 2) po.range = std::atof(argv[2]);
+  StanceTorques torques(model, body, q, leg);
+  std::vector<double> tq_len_peak, tq_peak, tq_len_len, tq_len, tq_len_t, tq_t, tq_gain;
+  int tq_lower = 0, tq_higher = 0;
   std::vector<double> h_sbl, h_rrt, h_ours, h_ratio, hc_sbl, hc_ours, h_len, c_sbl, c_rrt, t_sbl, t_rrt, t_ours, t_ompl, l_raw, l_smooth, r_ours, r_ompl;
   int ok_sbl = 0, ok_rrt = 0, shorter = 0, dirty = 0, straight = 0;
   const int only = std::getenv("FOOTFALL_ONLY") ? std::atoi(std::getenv("FOOTFALL_ONLY")) : -1;
@@ -129,6 +155,19 @@ int main(int argc, char** argv) {
     shorter += s.length < r.length - 1e-9 || r.path.cols() == 2;
     dirty += first_colliding_edge(dense, r.path, 1e-3) >= 0;
     dirty += first_colliding_edge(dense, s.path, 1e-3) >= 0;
+    // 4. The peak-torque smoother (§7.1) on the same plan.
+    const SmoothingResult ts = smooth_path_for_torque(checker, torques, r.path);
+    const double len_peak = torques.lifted_path(s.path, 0.05).saturation;
+    tq_len_peak.push_back(len_peak);
+    tq_peak.push_back(ts.peak_saturation);
+    tq_gain.push_back(len_peak - ts.peak_saturation);
+    tq_len_len.push_back(s.length);
+    tq_len.push_back(ts.length);
+    tq_len_t.push_back(s.seconds);
+    tq_t.push_back(ts.seconds);
+    tq_lower += ts.peak_saturation < len_peak - 1e-3;
+    tq_higher += ts.peak_saturation > len_peak + 1e-3;
+    dirty += first_colliding_edge(dense, ts.path, 1e-3) >= 0;
   }
   std::printf("planning, %d random feasible queries (waypoints above random stable cells), 1 s budget;\n"
               "  %d of them have a free straight edge (the rest must go round or over rocks):\n", queries, straight);
@@ -152,6 +191,14 @@ int main(int argc, char** argv) {
   std::printf("  OMPL simplifyMax:          %5.1f ms median, length x %.3f median\n", 1e3 * median(t_ompl),
               median(r_ompl));
   std::printf("  time ratio ours / OMPL: %.2f\n", median(t_ours) / std::max(1e-12, median(t_ompl)));
-  std::printf("dense re-check (1e-3 rad, zero clearance) of %d raw + smoothed paths: %d in collision\n", 2 * ok_sbl, dirty);
+  std::printf("peak-torque smoothing (§7.1) vs length smoothing, same %d plans (peak |tau|/limit with the leg in the air):\n"
+              "  peak: length-smoothed %.3f median (max %.3f), torque-smoothed %.3f median (max %.3f);"
+              " lower on %d, higher on %d, largest gain %.3f\n"
+              "  length: %.2f rad vs %.2f rad median; time: %.1f ms vs %.1f ms median (max %.1f ms)\n",
+              ok_sbl, median(tq_len_peak), max_of(tq_len_peak), median(tq_peak), max_of(tq_peak), tq_lower, tq_higher,
+              max_of(tq_gain), median(tq_len_len), median(tq_len), 1e3 * median(tq_len_t), 1e3 * median(tq_t),
+              1e3 * max_of(tq_t));
+  std::printf("dense re-check (1e-3 rad, zero clearance) of %d raw + length- and torque-smoothed paths: %d in collision\n",
+              3 * ok_sbl, dirty);
   return 0;
 }
