@@ -1,4 +1,4 @@
-// The constraint solve of dWorldStep through a sparse LDLᵀ (internal to cpp/dynamics).
+// The constraint solve of dWorldStep through a sparse LDLᵀ (the solver hook).
 //
 // dWorldStep hands ODE's Dantzig LCP solver the dense matrix A = J M⁻¹ Jᵀ of all rows. With the
 // guessed active set (rover_step.cpp) almost every row is unbounded, and the rest are contact
@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "ernest/dynamics/sparse_ldlt.hpp"
+#include "ernest/solver/sparse_ldlt.hpp"
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 /// Working data of one simulation's constraint solves, and what they did.
 ///
@@ -138,4 +138,4 @@ bool sparse_lcp_active();
 /// Why sparse_lcp_active() is false ("" when it is true).
 const std::string& sparse_lcp_inactive_reason();
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

@@ -1,5 +1,5 @@
 // ODE's LCP entry point, bound to the sparse solver (see ode_lcp.hpp for why and when).
-#include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/solver/ode_lcp.hpp"
 
 #include <dlfcn.h>
 #include <emmintrin.h>
@@ -24,7 +24,7 @@ __attribute__((visibility("default"))) void dxSolveLCP(dxWorldProcessMemArena* m
                                                        dReal* outer_w, unsigned nub,
                                                        dReal* pairslh, int* findex);
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 namespace {
 
@@ -587,11 +587,11 @@ bool sparse_lcp_active() { return probe_verdict().empty(); }
 
 const std::string& sparse_lcp_inactive_reason() { return probe_verdict(); }
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver
 
 void dxSolveLCP(dxWorldProcessMemArena* memarena, unsigned n, dReal* A, dReal* pairsbx,
                 dReal* outer_w, unsigned nub, dReal* pairslh, int* findex) {
-  using namespace ernest::dynamics::detail;
+  using namespace ernest::solver;
   reached = true;
   LcpWorkspace* ws = current;
   if (ws && ws->enabled && (probing || sparse_lcp_active()) &&
@@ -608,7 +608,7 @@ void dxSolveLCP(dxWorldProcessMemArena* memarena, unsigned n, dReal* A, dReal* p
   // Friction rows (within a scope, and not too many rows): keep the problem for solve_coulomb.
   bool coulomb = false;
   if (ws && ws->exact_friction && findex &&
-      n <= static_cast<unsigned>(ernest::dynamics::LdltPlan::kMaxRows)) {
+      n <= static_cast<unsigned>(ernest::solver::LdltPlan::kMaxRows)) {
     for (unsigned i = nub; i < n && !coulomb; ++i) coulomb = findex[i] >= 0;
   }
   if (coulomb) {

@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/solver/ode_lcp.hpp"
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 LdltPlan* LcpWorkspace::find(const unsigned* rows, int n, int stride) {
   for (int q = 0; q < kPlans; ++q)  // (a constant count: unrolled)
@@ -148,4 +148,4 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
   next_guess = static_cast<int>(ng);
 }
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

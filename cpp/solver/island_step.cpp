@@ -10,10 +10,10 @@
 #include <cmath>
 
 #include "ernest/common/vector_math.hpp"
-#include "ernest/dynamics/island_step.hpp"
-#include "ernest/dynamics/ode_quaternion.hpp"
+#include "ernest/solver/island_step.hpp"
+#include "ernest/solver/ode_quaternion.hpp"
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 // The step's parts, inlined into step() and resolve() (the step's path as one function, as before
 // resolve() shared them).
@@ -339,4 +339,4 @@ void IslandStep::integrate(double h) {
 
 #undef ERNEST_INLINE
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

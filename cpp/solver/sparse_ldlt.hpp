@@ -6,7 +6,7 @@
 #include <array>
 #include <cstdint>
 
-namespace ernest::dynamics {
+namespace ernest::solver {
 
 /// Symbolic analysis of one sparsity pattern: minimum-degree order, the pattern of the factor,
 /// and the trailing clique that is factorised densely. A pure function of the pattern: the
@@ -119,4 +119,4 @@ class SparseLdlt {
   alignas(16) std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> e_{};
 };
 
-}  // namespace ernest::dynamics
+}  // namespace ernest::solver
