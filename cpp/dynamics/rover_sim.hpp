@@ -309,7 +309,7 @@ struct Snapshot {
   std::array<int, 4> soil_steps{};
   std::array<double, 4> slip_offset{};
   /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
-  /// of the steps that follow; internal layout, see cpp/solver/ode_lcp.hpp).
+  /// of the steps that follow; internal layout, see cpp/solver/lcp_workspace.hpp).
   std::vector<std::uint64_t> solver_patterns;
   bool valid = false;
 };

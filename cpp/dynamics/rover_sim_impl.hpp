@@ -250,7 +250,7 @@ struct RoverData {
   std::array<Snapshot::Body, 6> saved{};        // bodies at the start of the step (retries)
   std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
   std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
-  solver::LcpWorkspace lcp;  // the sparse constraint solves (ode_lcp.hpp)
+  solver::LcpWorkspace lcp;  // the sparse constraint solves (lcp_workspace.hpp)
   // Our own step (SimOptions::stepper == Own): the bodies, permanent joints (bound by build())
   // and the attempt's contacts and linear motors, recorded instead of created in ODE.
   solver::IslandStep island;

@@ -2,8 +2,8 @@
 // island_rows.cpp: each joint's rows). Stage by stage as ODE 0.16.2's dxStepIsland
 // (ode/src/step.cpp): 0, gravity and the implicit gyroscopic torque into the accumulators and the
 // world-frame inverse inertias; 2a, the joints' rows (rhs and CFM over h); 2b/2c, A = J M⁻¹ Jᵀ +
-// CFM and rhs = c / h - J (v / h + M⁻¹ f); 3, the solve (here solve_sparse, ode_lcp.hpp); 4, the
-// constraint forces Jᵀ lambda (and the joints' feedback), the velocity update and dxStepBody's
+// CFM and rhs = c / h - J (v / h + M⁻¹ f); 3, the solve (here solve_sparse, sparse_lcp.hpp); 4,
+// the constraint forces Jᵀ lambda (and the joints' feedback), the velocity update and dxStepBody's
 // integration (ode/src/util.cpp), written back with ODE's setters. resolve(): the same problem
 // again with new targets and forces (island_resolve.cpp: its checks).
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The constraint solver's memory between steps (ode_lcp.hpp's LcpWorkspace): the remembered
+// The constraint solver's memory between steps (lcp_workspace.hpp's LcpWorkspace): the remembered
 // LDLᵀ plans (round robin over kPlans row sets, grown when a new pattern falls outside), the
 // remembered active-set guesses, and both carried through a Snapshot (save / load).
 #include <algorithm>
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "ernest/solver/ode_lcp.hpp"
+#include "ernest/solver/lcp_workspace.hpp"
 
 namespace ernest::solver {
 

@@ -100,7 +100,7 @@ TEST(SparseLdlt, TheRoversFlatPatternSolvesLikeEigen) {
   }
 }
 
-// solve_many (several right-hand sides interleaved: solve_clamped's columns in ode_lcp.cpp) gives
+// solve_many (several right-hand sides interleaved: solve_clamped's columns in sparse_lcp.cpp) gives
 // the bits of one solve() per column, for every count up to 9 (two blocks of four and a
 // remainder), on the rover's pattern and on dense matrices; and the answers solve the system.
 TEST(SparseLdlt, SolveManyGivesTheBitsOfSeparateSolves) {

@@ -1,5 +1,5 @@
-// Tests of the sparse constraint solver (cpp/solver/sparse_ldlt, ode_lcp) against dense
-// linear algebra (Eigen) and against ODE's own Dantzig solver.
+// Tests of the sparse constraint solver (cpp/solver/sparse_ldlt, sparse_lcp, ode_lcp) against
+// dense linear algebra (Eigen) and against ODE's own Dantzig solver.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
