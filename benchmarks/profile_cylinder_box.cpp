@@ -19,8 +19,8 @@
 
 #include "ernest/dynamics/cylinder_box.hpp"
 #include "ernest/dynamics/obstacle_contacts.hpp"
-#include "ernest/dynamics/ode_init.hpp"
 #include "ernest/dynamics/rover_parameters.hpp"
+#include "ernest/solver/ode_init.hpp"
 
 namespace {
 
@@ -93,7 +93,7 @@ __attribute__((noinline)) int fcl_calls(const std::vector<Pose>& poses, double r
 }  // namespace
 
 int main() {
-  ernest::dynamics::detail::init_ode_once();
+  ernest::solver::init_ode_once();
   const ernest::dynamics::RoverParameters rp;
   const double r = rp.wheel_radius, w = rp.wheel_width;
   dSpaceID space = dSimpleSpaceCreate(nullptr);

@@ -9,11 +9,11 @@
 #include "bindings.hpp"
 #include "ernest/common/validation.hpp"
 #include "ernest/dynamics/batch_stepper.hpp"
-#include "ernest/dynamics/ode_init.hpp"
 #include "ernest/dynamics/rover_parameters.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/dynamics/terrain.hpp"
 #include "ernest/dynamics/wheel_sync.hpp"
+#include "ernest/solver/ode_init.hpp"
 #include "interrupt.hpp"
 
 namespace py = pybind11;
@@ -217,7 +217,7 @@ void bind_dynamics(py::module_& m) {
                      "solver (same solution to rounding); False: ODE's solver for every step")
       .def_readwrite("stepper", &SimOptions::stepper,
                      "Stepper.Ode: ODE's dWorldStep; Stepper.Own: our own island step "
-                     "(cpp/dynamics/island_step.hpp), the same step to ~1e-10, falling back to "
+                     "(cpp/solver/island_step.hpp), the same step to ~1e-10, falling back to "
                      "dWorldStep where it does not reproduce it")
       .def_readwrite("wheel_obstacle_contact", &SimOptions::wheel_obstacle_contact,
                      "WheelObstacleContact.Ode (default): ODE's dCollideCylinderBox, its points "
@@ -485,13 +485,13 @@ void bind_dynamics(py::module_& m) {
         "at gimbal angles (psi, phi), with x = A^+ y (eq 9).");
   // The solver hook (ARCHITECTURE.md, "The solver hook"); ernest_cpp.dynamics wraps these and
   // turns an inactive hook into one RuntimeWarning.
-  m.def("fast_lcp_active", &fast_lcp_active,
+  m.def("fast_lcp_active", &solver::fast_lcp_active,
         "Whether ODE's constraint solves reach ernest's sparse solver in this process (the "
-        "symbol-binding hook of cpp/dynamics/ode_lcp.cpp works and answers a probe step as ODE "
+        "symbol-binding hook of cpp/solver/ode_lcp.cpp works and answers a probe step as ODE "
         "does). False: every solve is ODE's Dantzig solver (slower; friction by ODE's "
         "approximation, not corrected to the final normal force). Initialises "
         "ODE; probes once per process.");
-  m.def("fast_lcp_inactive_reason", &fast_lcp_inactive_reason,
+  m.def("fast_lcp_inactive_reason", &solver::fast_lcp_inactive_reason,
         "Why fast_lcp_active() is False; '' when it is True.");
 }
 

@@ -1,6 +1,6 @@
 # ODE for ernest (used by the build and by the installed ernestConfig.cmake).
 #
-# cpp/dynamics/ode_lcp.cpp defines ODE's internal constraint-solver entry, dxSolveLCP, and relies
+# cpp/solver/ode_lcp.cpp defines ODE's internal constraint-solver entry, dxSolveLCP, and relies
 # on the dynamic linker binding libode's own call to it (ARCHITECTURE.md, "The solver hook"). So
 # ODE must be (1) a version whose dxSolveLCP has the signature and data layout ode_lcp.cpp reads:
 # the 0.16 series (0.16.2, Debian 12, is the one tested; a run-time probe checks the layout
@@ -17,7 +17,7 @@ function(ernest_check_ode version libraries)
     message(FATAL_ERROR
       "ernest: found ODE ${version}, supported ODE >= ${ERNEST_ODE_VERSION_MIN} and < "
       "${ERNEST_ODE_VERSION_LESS} (the 0.16 series; Debian 12 libode-dev 0.16.2 is tested). "
-      "cpp/dynamics/ode_lcp.cpp replaces ODE's internal dxSolveLCP and reads ODE 0.16's data "
+      "cpp/solver/ode_lcp.cpp replaces ODE's internal dxSolveLCP and reads ODE 0.16's data "
       "layout; install ODE 0.16.x, or point PKG_CONFIG_PATH at one.")
   endif()
   foreach(lib IN LISTS libraries)
@@ -25,7 +25,7 @@ function(ernest_check_ode version libraries)
     if(name MATCHES "^libode.*\\.a$")
       message(FATAL_ERROR
         "ernest: ODE resolves to the static library ${lib}; ernest needs the shared libode "
-        "(libode.so). cpp/dynamics/ode_lcp.cpp defines ODE's dxSolveLCP so that the dynamic "
+        "(libode.so). cpp/solver/ode_lcp.cpp defines ODE's dxSolveLCP so that the dynamic "
         "linker binds ODE's call to it: with a static libode the two definitions do not link. "
         "Install the shared library (Debian: libode-dev provides libode.so) or, for a self-built "
         "ODE, configure it with BUILD_SHARED_LIBS=ON.")

@@ -1,3 +1,5 @@
+// BatchStepper (batch_stepper.hpp): N rovers stepped on the thread pool, one try-lock per call,
+// commands in and state vectors out as dense row-major arrays.
 #include "ernest/dynamics/batch_stepper.hpp"
 
 #include <algorithm>

@@ -378,7 +378,7 @@ bool RoverSim::Impl::touching_obstacles() {
 // opt.dt / n, and with the default of one, more where a wheel's slip grew fast (below).
 // A force added with add_force() acts over the whole step.
 void RoverSim::Impl::step() {
-  init_ode_once();
+  solver::init_ode_once();
   obstacles_collected = false;
   int n = opt.obstacle_substeps;
   if (h != opt.dt) set_step_length(opt.dt);

@@ -14,7 +14,7 @@ using namespace detail;
 
 void RoverSim::Impl::read_outputs(double dt) {
   if (!quaternions_fixed)
-    for (auto b : body) canonicalise_quaternion(b);
+    for (auto b : body) solver::canonicalise_quaternion(b);
   quaternions_fixed = false;  // (until the next own step)
   st.time += dt;
   const Mat3 rc = rot(kChassis);

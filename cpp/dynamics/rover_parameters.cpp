@@ -1,3 +1,5 @@
+// Validation of the rover's parameters (rover_parameters.hpp: seed 004 Table 1 and our
+// assumptions); a motor's current and electrical power at a torque and speed (eq 40).
 #include "ernest/dynamics/rover_parameters.hpp"
 
 #include <cmath>

@@ -19,8 +19,9 @@
 // below by zero and solved exactly by the sparse solver; guessed at 0: no contact). Both friction
 // rows inside mu F_n (sticking, the rolling wheel's usual case): unbounded spring–damper rows,
 // checked after the step. Otherwise (sliding): ODE's friction rows bounded by mu times the
-// contact's normal force (findex), which ode_lcp.cpp's hook resolves with the final normal force
-// (solve_coulomb), so the guessed and the bounded paths give the same Coulomb law.
+// contact's normal force (findex), which the solver hook (solver/ode_lcp.cpp) resolves with the
+// final normal force (solve_coulomb), so the guessed and the bounded paths give the same Coulomb
+// law.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -124,10 +125,11 @@ using namespace detail;
 // Obstacle contacts (seed 004 §3.4 against the boxes; near() in rover_step.cpp collects them),
 // guessed like rigid ground: a wheel's points sticking (normal pushing, both friction rows inside
 // mu F_n, ODE's pyramid) are emitted with unbounded friction rows, so that the step is one linear
-// system for the sparse solver (ode_lcp.cpp) instead of ODE's pivoting with findex; a point of
-// such a wheel found carrying no normal force is emitted without friction rows (obstacle_off);
-// a wheel whose guess fails is emitted as before, ODE's contact with its friction bounded by mu
-// times the normal force. modes: every row with its bounds (RowModes::all_bounded()): all bounded.
+// system for the sparse solver (solver/sparse_lcp.cpp) instead of ODE's pivoting with findex; a
+// point of such a wheel found carrying no normal force is emitted without friction rows
+// (obstacle_off); a wheel whose guess fails is emitted as before, ODE's contact with its friction
+// bounded by mu times the normal force. modes: every row with its bounds (RowModes::all_bounded()):
+// all bounded.
 void RoverSim::Impl::emit_obstacles(RowModes modes) {
   for (int k = 0; k < n_obstacle_contacts; ++k) {
     const int w = obstacle_wheel[k];

@@ -19,11 +19,11 @@ RoverSim::Impl::DriveRow RoverSim::Impl::drive_row(int k) const {
   return {kYawMotor + (k - 4), k == 4 ? yaw_axis : roll_axis, kChassis, kBogie};
 }
 
-// The x and y rows at the patch are the friction rows of an ODE contact with the terrain
-// normal n (fdir1 = x, then n × x = y), whose own normal row carries the normal force, bounded
-// below by zero: the sparse solver (ode_lcp.cpp) solves it exactly whether it pushes or not, so
-// it needs no guess of its own. A normal force guessed at zero (the wheel leaving the soil
-// faster than F_z / c) keeps the row slack if shear rows need the contact.
+// The x and y rows at the patch are the friction rows of an ODE contact with the terrain normal n
+// (fdir1 = x, then n × x = y), whose own normal row carries the normal force, bounded below by
+// zero: the sparse solver (solver/sparse_lcp.cpp) solves it exactly whether it pushes or not, so it
+// needs no guess of its own. A normal force guessed at zero (the wheel leaving the soil faster than
+// F_z / c) keeps the row slack if shear rows need the contact.
 void RoverSim::Impl::emit_ground(int i, RowModes modes, Vec3& fw, Vec3& tw) {
   const auto mode_of = [&](int row) { return modes[row]; };
   const bool soft = opt.ground == GroundType::Soil;

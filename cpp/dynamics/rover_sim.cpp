@@ -152,10 +152,10 @@ RoverSim::Impl::Impl(const RoverParameters& params, const HeightMap& terrain,
     : RoverModel(params, terrain, obstacles, options) {}
 
 void RoverSim::Impl::build() {
-  init_ode_once();
+  solver::init_ode_once();
   // find ODE's own solver now (throws here, not inside a step); warns once if the hook is off
   // (our own island step calls the sparse solver itself: it needs no hook)
-  const bool hook = detail::sparse_lcp_active();
+  const bool hook = solver::sparse_lcp_active();
   stats.fast_lcp = opt.sparse_lcp && (hook || opt.stepper == Stepper::Own);
   lcp.enabled = opt.sparse_lcp;
   world = dWorldCreate();
@@ -329,7 +329,7 @@ void RoverSim::Impl::place(double x, double y, double heading, double psi, doubl
     dBodySetAngularVel(b, w0.x(), w0.y(), w0.z());
     dBodySetForce(b, 0, 0, 0);
     dBodySetTorque(b, 0, 0, 0);
-    canonicalise_quaternion(b);
+    solver::canonicalise_quaternion(b);
   }
   st = RoverState{};
   st.gimbal_yaw = psi;

@@ -31,8 +31,9 @@ class SimulationDiverged : public std::runtime_error {
 
 /// Who takes the step of the rover's bodies (SimOptions::stepper).
 enum class Stepper : int {
-  Ode = 0,  ///< ODE's dWorldStep (the constraint solve through the solver hook, ode_lcp.hpp)
-  Own = 1,  ///< our own island step (cpp/dynamics/island_step.hpp): the same step, faster
+  /// ODE's dWorldStep (the constraint solve through the solver hook, cpp/solver/ode_lcp.hpp)
+  Ode = 0,
+  Own = 1,  ///< our own island step (cpp/solver/island_step.hpp): the same step, faster
 };
 
 /// How a wheel's contact with a rock is found (SimOptions::wheel_obstacle_contact).
@@ -92,7 +93,7 @@ struct SimOptions {
   /// pivoted by ODE (comparisons). Needs guess_active_set.
   bool guess_obstacle_contacts = true;
   /// Solve the step's constraint system with a sparse LDLᵀ (minimum-degree order,
-  /// cpp/dynamics/sparse_ldlt.hpp) when every row is unbounded or has a zero bound (the contacts'
+  /// cpp/solver/sparse_ldlt.hpp) when every row is unbounded or has a zero bound (the contacts'
   /// normal rows, guessed pushing or not as they ended last time and checked), which the
   /// guessed active set makes the usual case, instead of ODE's dense Dantzig solver; other
   /// steps still go to ODE. The same solution to rounding; false: ODE's solver for every step.
@@ -125,7 +126,7 @@ struct SimOptions {
   /// obstacle step (for comparisons).
   int obstacle_substeps = 1;
   /// Who steps the bodies: our own island step that reproduces ODE's dWorldStep for the rover's
-  /// bodies and joints (cpp/dynamics/island_step.hpp; ~10 % faster a step, the same step to
+  /// bodies and joints (cpp/solver/island_step.hpp; ~10 % faster a step, the same step to
   /// ~1e-15 m from the same state: benchmarks/RESULTS.md, "Where a step goes"), or
   /// dWorldStep itself. Own falls back to dWorldStep for any attempt it does not reproduce (a
   /// joint option it does not know, a solve the sparse path refuses), so the two differ by
@@ -145,7 +146,7 @@ struct SimOptions {
   /// With the Own stepper: a re-solve of a step whose rows are the last attempt's (the implicit
   /// slip's solves that only move the soil rows' levels, rover_step.cpp: only the normal rows'
   /// targets and the explicit torques change) keeps that attempt's rows, A and LDLᵀ factor and
-  /// solves a new right-hand side (cpp/dynamics/island_step.hpp, IslandStep::resolve); one whose
+  /// solves a new right-hand side (cpp/solver/island_step.hpp, IslandStep::resolve); one whose
   /// slips moved the soil rows' caps keeps the rows, J and A but for its diagonal (the caps'
   /// CFMs) and factorises again. The same bits either way (SolverStats::rhs_resolves and
   /// cap_resolves count them); false rebuilds every attempt (tests, comparisons).
@@ -272,9 +273,10 @@ struct SolverStats {
   int obstacles_touched = 0;
   /// Solves can take the sparse path: SimOptions::sparse_lcp, and our own island step
   /// (SimOptions::stepper = Own, which calls the sparse solver itself) or the solver hook works in
-  /// this process (fast_lcp_active(), ode_init.hpp). False: every solve is ODE's, friction
-  /// bounded by its approximation (no solve_coulomb). With Own and the hook off, the attempts
-  /// handed to dWorldStep (own_fallbacks) are ODE's solver's, without solve_coulomb.
+  /// this process (solver::fast_lcp_active(), cpp/solver/ode_init.hpp). False: every solve is
+  /// ODE's, friction bounded by its approximation (no solve_coulomb). With Own and the hook off,
+  /// the attempts handed to dWorldStep (own_fallbacks) are ODE's solver's, without
+  /// solve_coulomb.
   bool fast_lcp = false;
 };
 
@@ -307,7 +309,7 @@ struct Snapshot {
   std::array<int, 4> soil_steps{};
   std::array<double, 4> slip_offset{};
   /// Sparsity patterns the constraint solver's orderings were made from (they set the rounding
-  /// of the steps that follow; internal layout, see cpp/dynamics/ode_lcp.hpp).
+  /// of the steps that follow; internal layout, see cpp/solver/lcp_workspace.hpp).
   std::vector<std::uint64_t> solver_patterns;
   bool valid = false;
 };

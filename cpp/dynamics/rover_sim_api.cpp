@@ -35,7 +35,7 @@ void RoverSim::reset(double x, double y, double heading, double psi, double phi,
   require_finite("RoverSim.reset", "heading", heading);
   require_in_range("RoverSim.reset", "psi", psi, -impl_->p.yaw_limit, impl_->p.yaw_limit);
   require_in_range("RoverSim.reset", "phi", phi, -impl_->p.roll_limit, impl_->p.roll_limit);
-  init_ode_once();
+  solver::init_ode_once();
   require_in_range("RoverSim.reset", "speed", speed, -5.0, 5.0);
   impl_->run_ode([&] {
     impl_->place(x, y, heading, psi, phi, speed);
@@ -186,7 +186,7 @@ void RoverSim::restore(const Snapshot& s) {
     for (RowState m : *modes)
       require(static_cast<int>(m) >= 0 && static_cast<int>(m) <= 3,
               "RoverSim.restore: corrupt snapshot (row_mode)");
-  init_ode_once();
+  solver::init_ode_once();
   impl_->lcp.load(s.solver_patterns);  // first: it may throw on a corrupt snapshot
   for (int b = 0; b < 6; ++b) {
     const dBodyID id = impl_->body[b];

@@ -17,10 +17,15 @@
 #include <string>
 #include <vector>
 
-#include "ernest/dynamics/island_step.hpp"
-#include "ernest/dynamics/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
-#include "ernest/dynamics/ode_lcp.hpp"
-#include "ernest/dynamics/ode_quaternion.hpp"  // canonicalise_quaternion
+// The constraint solver (cpp/solver) as the rover uses it: ODE's set-up and its error scope
+// (init_ode_once, OdeCallScope, OdeInternalError, ode_lcp_messages), the solves' workspace
+// (LcpWorkspace: its switches enabled / exact_friction / coulomb_friction, its counters, and
+// clear / save / load for a Snapshot), the hook's scope and probe (LcpScope, sparse_lcp_active),
+// our own island step (IslandStep) and canonicalise_quaternion.
+#include "ernest/solver/island_step.hpp"
+#include "ernest/solver/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
+#include "ernest/solver/ode_lcp.hpp"
+#include "ernest/solver/ode_quaternion.hpp"  // canonicalise_quaternion
 #include "ernest/dynamics/row_guess.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/soil/bekker_wong.hpp"
@@ -245,10 +250,10 @@ struct RoverData {
   std::array<Snapshot::Body, 6> saved{};        // bodies at the start of the step (retries)
   std::array<double, kGuessedRowCount> row_force{};    // solved force of every guessed row
   std::array<double, 6> explicit_motor_torque{};  // Torque-mode set-points applied this step
-  detail::LcpWorkspace lcp;  // the sparse constraint solves (ode_lcp.hpp)
+  solver::LcpWorkspace lcp;  // the sparse constraint solves (lcp_workspace.hpp)
   // Our own step (SimOptions::stepper == Own): the bodies, permanent joints (bound by build())
   // and the attempt's contacts and linear motors, recorded instead of created in ODE.
-  detail::IslandStep island;
+  solver::IslandStep island;
   SolverStats stats{};
 };
 
@@ -269,9 +274,9 @@ struct RoverSim::Impl : detail::RoverModel, detail::RoverData {
       throw SimulationDiverged("RoverSim: ODE failed internally earlier (" + ode_failure +
                                "); this simulator cannot be used again, create a new RoverSim");
     try {
-      const detail::OdeCallScope own;  // ODE's errors in here throw (ode_init.hpp)
+      const solver::OdeCallScope own;  // ODE's errors in here throw (ode_init.hpp)
       f();
-    } catch (const detail::OdeInternalError& e) {
+    } catch (const solver::OdeInternalError& e) {
       ode_failure = e.what();
       diverged = true;
       throw SimulationDiverged(std::string("SimulationDiverged: ODE internal error (") + e.what() +

@@ -223,7 +223,7 @@ bool RoverSim::Impl::solve_rows(RowStates& guess, RowStates& next, RowStates& tr
 // The attempt's contacts and linear motors are recorded by the island step for either stepper;
 // for dWorldStep, world_step() creates them in ODE (IslandStep::materialise) in the same order.
 // Every attempt's joints fit: four ground contacts, four compaction motors, the obstacles'.
-static_assert(kMaxObstacleContacts + 8 <= detail::IslandStep::kMaxAttemptJoints,
+static_assert(kMaxObstacleContacts + 8 <= solver::IslandStep::kMaxAttemptJoints,
               "IslandStep must record every joint of an attempt");
 
 void RoverSim::Impl::add_contact_joint(const dContact& c, dBodyID b1, dBodyID b2,
@@ -236,7 +236,7 @@ void RoverSim::Impl::add_lmotor_joint(dBodyID b, const Vec3& axis, double fmax, 
   island.add_lmotor(b, a, 0.0, fmax, cfm);
 }
 
-// One attempt's step of the bodies. Own: our island step (island_step.hpp); where it does not
+// One attempt's step of the bodies. Own: our island step (solver/island_step.hpp); where it does not
 // reproduce dWorldStep it changes nothing, and the attempt's joints are created in ODE for
 // dWorldStep (with the sparse path off when our solve already found it cannot: ODE's Dantzig
 // solver then, as the hook would have gone).
@@ -247,9 +247,9 @@ void RoverSim::Impl::world_step() {
     dWorldStep(world, h);
     return;
   }
-  const detail::IslandStep::Outcome r =
+  const solver::IslandStep::Outcome r =
       opt.resolve_rhs_only ? island.resolve(world, h, lcp) : island.step(world, h, lcp);
-  using Outcome = detail::IslandStep::Outcome;
+  using Outcome = solver::IslandStep::Outcome;
   if (r == Outcome::Stepped || r == Outcome::Resolved || r == Outcome::ResolvedCaps) {
     ++stats.own_steps;
     if (r == Outcome::Resolved) ++stats.rhs_resolves;
@@ -260,7 +260,7 @@ void RoverSim::Impl::world_step() {
   ++stats.own_fallbacks;
   island.materialise(world, contacts);
   const bool enabled = lcp.enabled;
-  if (r == detail::IslandStep::Outcome::SolveRefused) lcp.enabled = false;
+  if (r == solver::IslandStep::Outcome::SolveRefused) lcp.enabled = false;
   dWorldStep(world, h);
   lcp.enabled = enabled;
 }
@@ -268,7 +268,7 @@ void RoverSim::Impl::world_step() {
 void RoverSim::Impl::step_once() {
   if (diverged)
     throw SimulationDiverged("RoverSim: the simulation diverged earlier; restore() or reset() first");
-  init_ode_once();
+  solver::init_ode_once();
   island.forget();  // a new step: the joints' parameters change (stops, drives), resolve() may not
   double psi = start_psi, phi = start_phi;
   if (!start_current) {  // the bodies changed since read_outputs() (restore)
@@ -298,8 +298,8 @@ void RoverSim::Impl::step_once() {
   // and a bounded row cannot be wrong).
   RowStates guess = guesser.first_guess();
   RowStates next = guess, tried = guess;
-  const std::uint64_t lcp_messages = ode_lcp_messages;
-  const detail::LcpScope lcp_scope(&lcp);
+  const std::uint64_t lcp_messages = solver::ode_lcp_messages;
+  const solver::LcpScope lcp_scope(&lcp);
   obstacle_try = obstacle_mode;
   obstacle_off = 0;
 
@@ -440,7 +440,7 @@ void RoverSim::Impl::step_once() {
   }
   obstacle_mode = obstacle_next;
   ++stats.steps;
-  if (ode_lcp_messages != lcp_messages) ++stats.lcp_errors;
+  if (solver::ode_lcp_messages != lcp_messages) ++stats.lcp_errors;
   stats.sparse_solves = lcp.sparse;
   stats.dense_solves = lcp.dense;
   stats.plans_made = lcp.plans_made;

@@ -1,3 +1,5 @@
+// The simulator's terrain (terrain.hpp): height maps (flat, slope, from heights) with their
+// bilinear height, gradient and normal, and the validation of box obstacles.
 #include "ernest/dynamics/terrain.hpp"
 
 #include <algorithm>

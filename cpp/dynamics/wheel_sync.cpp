@@ -1,3 +1,5 @@
+// The Jacobian wheel synchroniser of seed 004 §2.3 (wheel_sync.hpp): each wheel's Jacobian
+// (eqs 1–2) and the wheel speeds from the body command, x = A⁺ y (eqs 9–10).
 #include "ernest/dynamics/wheel_sync.hpp"
 
 #include <Eigen/Geometry>

@@ -1,3 +1,5 @@
+// The Asterix rover's wheel kinematics (asterix_model.hpp, seed 000 eqs 20–23): parameters
+// checked, the no-skid synchroniser and the pose integrated from the wheels.
 #include "ernest/opt/asterix_model.hpp"
 
 #include <array>

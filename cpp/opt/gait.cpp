@@ -1,3 +1,5 @@
+// Gaits (gait.hpp, seed 000 eq 1): phase to joint space, and their workspace trajectories
+// G(t) (eqs 6–7).
 #include "ernest/opt/gait.hpp"
 
 #include <cmath>

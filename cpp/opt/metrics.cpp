@@ -1,3 +1,5 @@
+// Per-transition metrics (metrics.hpp, seed 000 eqs 24–28): cost of transport, energy, distance,
+// maximum acceleration, heading.
 #include "ernest/opt/metrics.hpp"
 
 #include <algorithm>

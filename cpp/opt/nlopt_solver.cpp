@@ -1,3 +1,5 @@
+// NLopt SLSQP behind a C++ interface (nlopt_solver.hpp): tolerances, the time budget, and
+// exceptions in the callbacks captured and rethrown after NLopt returns.
 #include "ernest/opt/nlopt_solver.hpp"
 
 #include <algorithm>

@@ -1,3 +1,5 @@
+// Joint-space transition trajectories (trajectory.hpp): the synchronised trapezoid of Naive and
+// the C1 cubic spline through waypoints of Bezier, Linear and Spline, with exact extrema.
 #include "ernest/opt/trajectory.hpp"
 
 #include <algorithm>

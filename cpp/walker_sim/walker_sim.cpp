@@ -13,7 +13,7 @@
 #include <string>
 
 #include "ernest/common/validation.hpp"
-#include "ernest/dynamics/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
+#include "ernest/solver/ode_init.hpp"  // init_ode_once, OdeInternalError, OdeCallScope
 
 namespace ernest::walker_sim {
 
@@ -166,7 +166,7 @@ struct WalkerSim::Impl {
   }
 
   void build(const Eigen::Isometry3d& body, const Eigen::MatrixXd& q) {
-    dynamics::detail::init_ode_once();
+    solver::init_ode_once();
     world = dWorldCreate();
     contacts = dJointGroupCreate(0);
     const walker::WalkerParameters& p = model.params();
@@ -269,9 +269,9 @@ struct WalkerSim::Impl {
       }
     }
     try {
-      const dynamics::detail::OdeCallScope own;  // ODE's errors in here throw
+      const solver::OdeCallScope own;  // ODE's errors in here throw
       dWorldStep(world, o.dt);
-    } catch (const dynamics::detail::OdeInternalError& e) {
+    } catch (const solver::OdeInternalError& e) {
       broken = true;
       throw WalkerSimDiverged(std::string("WalkerSim: ") + e.what());
     }

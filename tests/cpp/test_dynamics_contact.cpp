@@ -18,7 +18,7 @@
 #include <Eigen/Geometry>
 
 #include "ernest/dynamics/obstacle_contacts.hpp"
-#include "ernest/dynamics/ode_init.hpp"
+#include "ernest/solver/ode_init.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "ernest/soil/rigid_contact.hpp"
 
@@ -45,7 +45,7 @@ struct Bench {
   bool force_explicit = false;
 
   Bench(double m, double radius, bool wheel, double gravity) : mass(m) {
-    detail::init_ode_once();
+    ernest::solver::init_ode_once();
     world = dWorldCreate();
     dWorldSetGravity(world, 0, 0, -gravity);
     space = dSimpleSpaceCreate(nullptr);
@@ -258,7 +258,7 @@ TEST(ObstacleContact, WheelPushingABoxFaceIsPushedAtItsAxleHeight) {
 // apart: over random poses of a wheel-sized cylinder and a rock-sized box, ODE finds no point
 // wherever it says disjoint; and it is not vacuous: it proves most of ODE's misses.
 TEST(ObstacleContact, CylinderBoxEarlyOutOnlySkipsPairsOdeFindsApart) {
-  detail::init_ode_once();
+  ernest::solver::init_ode_once();
   const double r = RoverParameters{}.wheel_radius, hl = 0.5 * RoverParameters{}.wheel_width;
   dSpaceID space = dSimpleSpaceCreate(nullptr);
   dGeomID cyl = dCreateCylinder(space, r, 2.0 * hl), box = dCreateBox(space, 1, 1, 1);

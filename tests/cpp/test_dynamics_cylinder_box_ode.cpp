@@ -15,7 +15,7 @@
 
 #include "cylinder_box_poses.hpp"
 #include "ernest/dynamics/obstacle_contacts.hpp"
-#include "ernest/dynamics/ode_init.hpp"
+#include "ernest/solver/ode_init.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 
 using namespace ernest::dynamics;
@@ -31,7 +31,7 @@ namespace {
 // generator regime by the same 0.9 threshold). The distributions are printed.
 void compare_with_ode(bool any_axis, int count) {
   constexpr double kShallow = 0.02;  // [m]
-  detail::init_ode_once();
+  ernest::solver::init_ode_once();
   dGeomID cyl = dCreateCylinder(nullptr, kR, 2 * kHl), box = dCreateBox(nullptr, 1, 1, 1);
   const auto set = [](dGeomID g, const Vec3& x, const Mat3& m) {
     dMatrix3 o;
@@ -94,7 +94,7 @@ void compare_with_ode(bool any_axis, int count) {
 // The exact contact as the dContactGeom near() records: the geom order, normal and sides of
 // merge_contact_points(dCollide(cylinder, box)).
 TEST(CylinderBox, ContactGeomHasOdesConventions) {
-  detail::init_ode_once();
+  ernest::solver::init_ode_once();
   dGeomID cyl = dCreateCylinder(nullptr, kR, 2 * kHl), box = dCreateBox(nullptr, 0.6, 0.6, 0.2);
   const Mat3 rc = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), kY).toRotationMatrix();
   dMatrix3 o;

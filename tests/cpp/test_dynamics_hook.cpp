@@ -11,10 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "ernest/dynamics/ode_init.hpp"
+#include "ernest/solver/ode_init.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 
 using namespace ernest::dynamics;
+using namespace ernest::solver;
 
 namespace {
 
@@ -90,7 +91,7 @@ TEST(SolverHook, FastPathIsActiveInThisBuildAndReported) {
 
 TEST(SolverHook, HandlersInstalledBeforeOursStillReceiveWhatIsNotOurs) {
   ASSERT_TRUE(installed_first);
-  detail::init_ode_once();
+  init_ode_once();
   // ours are installed, theirs are not lost
   EXPECT_NE(dGetMessageHandler(), &their_message);
   EXPECT_NE(dGetErrorHandler(), &their_error);
@@ -102,11 +103,11 @@ TEST(SolverHook, HandlersInstalledBeforeOursStillReceiveWhatIsNotOurs) {
   EXPECT_EQ(message_got.count, before.count + 1);
   EXPECT_EQ(message_got.num, 7);
   EXPECT_EQ(message_got.text, "their message 1");
-  const std::uint64_t counted = detail::ode_lcp_message_count();
+  const std::uint64_t counted = ode_lcp_message_count();
   dMessage(d_ERR_LCP, "LCP internal error, s <= 0 (s=%.4e)", -1.0);
   EXPECT_EQ(message_got.count, before.count + 2);
   EXPECT_EQ(message_got.num, d_ERR_LCP);
-  EXPECT_EQ(detail::ode_lcp_message_count(), counted);
+  EXPECT_EQ(ode_lcp_message_count(), counted);
   EXPECT_THROW(dError(2, "their error %d", 2), TheirError);
   EXPECT_EQ(error_got.text, "their error 2");
   EXPECT_THROW(dDebug(1, "assertion \"%s\" failed", "theirs"), TheirError);
@@ -115,16 +116,16 @@ TEST(SolverHook, HandlersInstalledBeforeOursStillReceiveWhatIsNotOurs) {
   // Inside one of ours (a RoverSim or WalkerSim step): LCP messages are counted, not passed on;
   // other messages are still theirs; errors throw OdeInternalError for our step to catch.
   {
-    const detail::OdeCallScope own;
+    const OdeCallScope own;
     dMessage(d_ERR_LCP, "LCP internal error, s <= 0 (s=%.4e)", -1.0);
-    EXPECT_EQ(detail::ode_lcp_message_count(), counted + 1);
+    EXPECT_EQ(ode_lcp_message_count(), counted + 1);
     EXPECT_EQ(message_got.count, before.count + 2);
     dMessage(8, "another message");
     EXPECT_EQ(message_got.count, before.count + 3);
     EXPECT_EQ(message_got.num, 8);
     const int errors = error_got.count, debugs = debug_got.count;
-    EXPECT_THROW(dError(3, "ours %d", 3), detail::OdeInternalError);
-    EXPECT_THROW(dDebug(4, "ours"), detail::OdeInternalError);
+    EXPECT_THROW(dError(3, "ours %d", 3), OdeInternalError);
+    EXPECT_THROW(dDebug(4, "ours"), OdeInternalError);
     EXPECT_EQ(error_got.count, errors);
     EXPECT_EQ(debug_got.count, debugs);
   }

@@ -9,10 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "ernest/dynamics/ode_init.hpp"
+#include "ernest/solver/ode_init.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 
 using namespace ernest::dynamics;
+using namespace ernest::solver;
 
 TEST(SolverHookOff, ProbeReportsItWarnsOnceAndOdeSolvesEveryStep) {
   testing::internal::CaptureStderr();

@@ -1,4 +1,4 @@
-// Our own island step (SimOptions::stepper = Own, cpp/dynamics/island_step.hpp) against ODE's
+// Our own island step (SimOptions::stepper = Own, cpp/solver/island_step.hpp) against ODE's
 // dWorldStep, the reference implementation it reproduces: from the same state (a Snapshot of
 // the Ode run restored into the Own one), one step each must agree to rounding, in every
 // scenario whose joints and options it covers (soft soil rolling and slipping, rocks with

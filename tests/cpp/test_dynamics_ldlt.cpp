@@ -1,4 +1,4 @@
-// SparseLdlt's numeric part (cpp/dynamics/sparse_ldlt_numeric.cpp: its own dense kernel for
+// SparseLdlt's numeric part (cpp/solver/sparse_ldlt_numeric.cpp: its own dense kernel for
 // supernodes and the dense tail) against Eigen's dense LDLᵀ on random symmetric positive definite
 // matrices: every dense size up to 48 and the rover's own flat-step pattern. (Tree-shaped
 // systems and the agreement with ODE's solver: test_dynamics_solver.cpp.)
@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "ernest/dynamics/sparse_ldlt.hpp"
+#include "ernest/solver/sparse_ldlt.hpp"
 #include "lcp_matrix.hpp"
 
-using namespace ernest::dynamics;
+using namespace ernest::solver;
 using Mask = LdltPlan::Mask;
 
 namespace {
@@ -100,7 +100,7 @@ TEST(SparseLdlt, TheRoversFlatPatternSolvesLikeEigen) {
   }
 }
 
-// solve_many (several right-hand sides interleaved: solve_clamped's columns in ode_lcp.cpp) gives
+// solve_many (several right-hand sides interleaved: solve_clamped's columns in sparse_lcp.cpp) gives
 // the bits of one solve() per column, for every count up to 9 (two blocks of four and a
 // remainder), on the rover's pattern and on dense matrices; and the answers solve the system.
 TEST(SparseLdlt, SolveManyGivesTheBitsOfSeparateSolves) {

@@ -1,6 +1,7 @@
 // Tests of the sparse solver's symbolic analysis (LdltPlan::analyse: minimum degree on row sets of
 // up to 64 rows in one word, more in two) and of the plans a simulation remembers
-// (LcpWorkspace::find/adopt/clear/save/load in cpp/dynamics/ode_lcp.cpp), as SolverStats counts them.
+// (LcpWorkspace::find/adopt/clear/save/load in cpp/solver/lcp_workspace.cpp), as SolverStats
+// counts them.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,11 +10,12 @@
 #include <stdexcept>
 #include <vector>
 
-#include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/solver/ode_lcp.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
-#include "ernest/dynamics/sparse_ldlt.hpp"
+#include "ernest/solver/sparse_ldlt.hpp"
 
 using namespace ernest::dynamics;
+using namespace ernest::solver;
 using Mask = LdltPlan::Mask;
 
 namespace {
@@ -129,14 +131,14 @@ RowSet row_set(int k) {
   }
   return s;
 }
-LdltPlan* find(detail::LcpWorkspace& ws, const RowSet& s) {
+LdltPlan* find(LcpWorkspace& ws, const RowSet& s) {
   LdltPlan* p = ws.find(s.rows.data(), static_cast<int>(s.rows.size()), 64);
   Mask set = 0;
   for (const unsigned r : s.rows) set |= bit(static_cast<int>(r));
   EXPECT_EQ(ws.find(set, static_cast<int>(s.rows.size()), 64), p);  // the same as a row set
   return p;
 }
-const LdltPlan& adopt(detail::LcpWorkspace& ws, const RowSet& s, const std::vector<Mask>& p) {
+const LdltPlan& adopt(LcpWorkspace& ws, const RowSet& s, const std::vector<Mask>& p) {
   return ws.adopt(find(ws, s), p.data(), s.rows.data(), static_cast<int>(s.rows.size()), 64);
 }
 
@@ -146,8 +148,8 @@ const LdltPlan& adopt(detail::LcpWorkspace& ws, const RowSet& s, const std::vect
 // factor grows it; clear() forgets every plan; save() and load() carry the plans and the next
 // slot, and load refuses slots out of the order save() writes them in.
 TEST(LcpWorkspace, RemembersPlansRoundRobinAndCarriesThemThroughSaveAndLoad) {
-  constexpr int kPlans = detail::LcpWorkspace::kPlans;
-  detail::LcpWorkspace ws;
+  constexpr int kPlans = LcpWorkspace::kPlans;
+  LcpWorkspace ws;
   std::vector<std::uint64_t> empty;
   ws.save(empty);
   for (int k = 1; k <= kPlans + 1; ++k) adopt(ws, row_set(k), row_set(k).pattern);
@@ -164,7 +166,7 @@ TEST(LcpWorkspace, RemembersPlansRoundRobinAndCarriesThemThroughSaveAndLoad) {
 
   std::vector<std::uint64_t> saved;
   ws.save(saved);
-  detail::LcpWorkspace back;
+  LcpWorkspace back;
   back.load(saved);
   EXPECT_EQ(find(back, row_set(1)), nullptr);
   for (int k = 2; k <= kPlans + 1; ++k) {
@@ -189,7 +191,7 @@ TEST(LcpWorkspace, RemembersPlansRoundRobinAndCarriesThemThroughSaveAndLoad) {
 
   // One plan, in slot 0; the same data claiming slot 1 (after an empty slot 0) or a next slot
   // that round robin cannot have reached is refused.
-  detail::LcpWorkspace one;
+  LcpWorkspace one;
   adopt(one, row_set(2), row_set(2).pattern);
   std::vector<std::uint64_t> good;
   one.save(good);

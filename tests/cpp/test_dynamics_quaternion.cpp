@@ -1,4 +1,4 @@
-// Quaternions as ODE stores them (cpp/dynamics/ode_quaternion.hpp), against ODE itself: the
+// Quaternions as ODE stores them (cpp/solver/ode_quaternion.hpp), against ODE itself: the
 // quaternion fixed_point_quaternion() computes without ODE must be, bit for bit, what setting the
 // unnormalised quaternion in ODE and canonicalising the body leaves (the island step sets it
 // directly, one call into ODE instead of two or more), and a fixed point of ODE's normalisation
@@ -11,10 +11,10 @@
 #include <limits>
 #include <random>
 
-#include "ernest/dynamics/ode_init.hpp"
-#include "ernest/dynamics/ode_quaternion.hpp"
+#include "ernest/solver/ode_init.hpp"
+#include "ernest/solver/ode_quaternion.hpp"
 
-using namespace ernest::dynamics;
+using namespace ernest::solver;
 
 namespace {
 
@@ -22,7 +22,7 @@ struct World {
   dWorldID world;
   dBodyID body;
   World() {
-    detail::init_ode_once();
+    init_ode_once();
     world = dWorldCreate();
     body = dBodyCreate(world);
   }
@@ -55,11 +55,11 @@ TEST(OdeQuaternion, FixedPointIsWhatOdeAndCanonicalisationLeave) {
     const double step = k % 2 ? std::pow(10.0, scale(rng) / 3.0 - 2.0) : 0.0;
     for (double& c : q) c = k % 2 ? c / norm + step * gauss(rng) : c * std::pow(10.0, scale(rng));
     dBodySetQuaternion(w.body, q);  // ODE normalises ...
-    detail::canonicalise_quaternion(w.body);  // ... and the body is moved to a fixed point
+    canonicalise_quaternion(w.body);  // ... and the body is moved to a fixed point
     dQuaternion ode;
     std::memcpy(ode, dBodyGetQuaternion(w.body), sizeof ode);
     dQuaternion out;
-    if (!detail::fixed_point_quaternion(q, out)) continue;  // (ODE answers then: still correct)
+    if (!fixed_point_quaternion(q, out)) continue;  // (ODE answers then: still correct)
     ++found;
     ASSERT_TRUE(same_bits(out, ode, 4)) << "sample " << k;
     dBodySetQuaternion(w.body, out);
@@ -78,7 +78,7 @@ TEST(OdeQuaternion, ZeroOrNonFiniteIsLeftToOde) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
   const dQuaternion zero = {0, 0, 0, 0}, with_nan = {1, nan, 0, 0}, with_inf = {inf, 0, 0, 0};
-  EXPECT_FALSE(detail::fixed_point_quaternion(zero, out));
-  EXPECT_FALSE(detail::fixed_point_quaternion(with_nan, out));
-  EXPECT_FALSE(detail::fixed_point_quaternion(with_inf, out));
+  EXPECT_FALSE(fixed_point_quaternion(zero, out));
+  EXPECT_FALSE(fixed_point_quaternion(with_nan, out));
+  EXPECT_FALSE(fixed_point_quaternion(with_inf, out));
 }

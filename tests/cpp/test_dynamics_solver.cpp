@@ -1,5 +1,5 @@
-// Tests of the sparse constraint solver (cpp/dynamics/sparse_ldlt, ode_lcp) against dense linear
-// algebra (Eigen) and against ODE's own Dantzig solver.
+// Tests of the sparse constraint solver (cpp/solver/sparse_ldlt, sparse_lcp, ode_lcp) against
+// dense linear algebra (Eigen) and against ODE's own Dantzig solver.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -12,13 +12,14 @@
 
 #include <ode/ode.h>
 
-#include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/solver/ode_lcp.hpp"
 #include "ernest/dynamics/rover_sim.hpp"
 #include "lcp_matrix.hpp"
 #include "snapshot_gap.hpp"
-#include "ernest/dynamics/sparse_ldlt.hpp"
+#include "ernest/solver/sparse_ldlt.hpp"
 
 using namespace ernest::dynamics;
+using namespace ernest::solver;
 using Mask = LdltPlan::Mask;
 
 namespace {
@@ -288,9 +289,9 @@ TEST(SparseLcp, SolvesContactsThatPushOrSeparateAndHandsFrictionBoundsToOde) {
     dJointAttach(ball, b, nullptr);
     dJointSetDBallAnchor1(ball, 0.0, 0.0, 0.1);
     dJointSetDBallAnchor2(ball, -1.0, 0.0, 0.1);
-    detail::LcpWorkspace ws;
+    LcpWorkspace ws;
     {
-      const detail::LcpScope scope(&ws);
+      const LcpScope scope(&ws);
       dWorldStep(w, 0.01);
     }
     const dReal* v = dBodyGetLinearVel(b);
@@ -305,7 +306,7 @@ TEST(SparseLcp, SolvesContactsThatPushOrSeparateAndHandsFrictionBoundsToOde) {
       // Thrown up now: the remembered guess (pushing) would pull; it must let go.
       dBodySetLinearVel(b, 0.0, 0.0, 2.0);
       {
-        const detail::LcpScope scope(&ws);
+        const LcpScope scope(&ws);
         dWorldStep(w, 0.01);
       }
       EXPECT_NEAR(dBodyGetLinearVel(b)[2], 2.0 - 9.81 * 0.01, 1e-9);
@@ -322,7 +323,7 @@ TEST(SparseLcp, SolvesContactsThatPushOrSeparateAndHandsFrictionBoundsToOde) {
 // (a normal row bounded below by 0 and 2 unbounded friction rows, as emit_obstacles emits a
 // sticking rock contact), pressed down and moving sideways: the contacts push and stop them.
 namespace {
-std::vector<double> step_box_row(int boxes, bool sparse, detail::LcpWorkspace& ws) {
+std::vector<double> step_box_row(int boxes, bool sparse, LcpWorkspace& ws) {
   dWorldID w = dWorldCreate();
   dWorldSetGravity(w, 0.0, 0.0, -9.81);
   dJointGroupID group = dJointGroupCreate(0);
@@ -357,7 +358,7 @@ std::vector<double> step_box_row(int boxes, bool sparse, detail::LcpWorkspace& w
   ws.enabled = sparse;
   ws.coulomb_friction = true;
   {
-    const detail::LcpScope scope(&ws);
+    const LcpScope scope(&ws);
     dWorldStep(w, 0.01);
   }
   std::vector<double> v;
@@ -371,10 +372,10 @@ std::vector<double> step_box_row(int boxes, bool sparse, detail::LcpWorkspace& w
 
 TEST(SparseLcp, StepsOfMoreThan64RowsStayOnTheSparsePath) {
   dInitODE2(0);
-  ASSERT_TRUE(detail::sparse_lcp_active());
+  ASSERT_TRUE(sparse_lcp_active());
   for (const int boxes : {4, 5, 8, 9}) {  // 15 x boxes - 3 rows: 57, 72, 117, 132
     SCOPED_TRACE(boxes);
-    detail::LcpWorkspace sparse_ws, dense_ws;
+    LcpWorkspace sparse_ws, dense_ws;
     const std::vector<double> ours = step_box_row(boxes, true, sparse_ws);
     const std::vector<double> ode = step_box_row(boxes, false, dense_ws);
     const bool fits = 15 * boxes - 3 <= LdltPlan::kMaxRows;

@@ -1,4 +1,4 @@
-"""Our own island step (SimOptions.stepper = Stepper.Own, the default; cpp/dynamics/island_step.hpp)
+"""Our own island step (SimOptions.stepper = Stepper.Own, the default; cpp/solver/island_step.hpp)
 against ODE's dWorldStep from Python: the option, its counts, and the same run to rounding."""
 
 import numpy as np

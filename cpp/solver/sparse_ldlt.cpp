@@ -1,13 +1,13 @@
 // Sparse LDLᵀ (sparse_ldlt.hpp), the plan: minimum-degree order on bit masks, the factor's
 // pattern, its supernodes and the lists the numeric part (sparse_ldlt_numeric.cpp) walks.
-#include "ernest/dynamics/sparse_ldlt.hpp"
+#include "ernest/solver/sparse_ldlt.hpp"
 
 #include <algorithm>
 #include <cstring>
 
 #include "ernest/common/vector_math.hpp"
 
-namespace ernest::dynamics {
+namespace ernest::solver {
 
 namespace {
 using Mask = LdltPlan::Mask;
@@ -258,4 +258,4 @@ void LdltPlan::list_zeros() {
     list_as(Mask{0});
 }
 
-}  // namespace ernest::dynamics
+}  // namespace ernest::solver

@@ -4,7 +4,7 @@
 // each joint's getInfo1/getInfo2 (joints/hinge.cpp, universal.cpp, amotor.cpp, lmotor.cpp,
 // contact.cpp; setBall and dxJointLimitMotor::addLimot in joints/joint.cpp). ODE's public inline
 // helpers (odemath.h, rotation.h) do the small products so that the arithmetic is ODE's own.
-#include "ernest/dynamics/island_step.hpp"
+#include "ernest/solver/island_step.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 #include <limits>
 #include <stdexcept>
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 namespace {
 
@@ -439,4 +439,4 @@ bool IslandStep::add_rows(Joint& jt, double fps, double erp) {
   return false;
 }
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

@@ -1,12 +1,12 @@
 // Quaternions as ODE stores them (ode_quaternion.hpp).
-#include "ernest/dynamics/ode_quaternion.hpp"
+#include "ernest/solver/ode_quaternion.hpp"
 
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 namespace {
 
@@ -144,4 +144,4 @@ bool fixed_point_quaternion(const dReal* q, dReal out[4]) {
   return false;
 }
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

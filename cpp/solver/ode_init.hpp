@@ -6,9 +6,9 @@
 #include <stdexcept>
 #include <string>
 
-namespace ernest::dynamics {
+namespace ernest::solver {
 
-/// Whether ODE's constraint solves reach ernest's sparse solver (cpp/dynamics/ode_lcp.cpp) in
+/// Whether ODE's constraint solves reach ernest's sparse solver (cpp/solver/ode_lcp.cpp) in
 /// this process. The hook works by symbol binding (ARCHITECTURE.md, "The solver hook"): if this
 /// libode binds its call internally, names it differently or lays out its data otherwise, every
 /// solve goes to ODE's own Dantzig solver instead (slower, and friction bounded by ODE's
@@ -18,8 +18,6 @@ bool fast_lcp_active();
 
 /// Why the fast path is off, for messages; empty while fast_lcp_active().
 std::string fast_lcp_inactive_reason();
-
-namespace detail {
 
 /// dInitODE2, ernest's ODE handlers (installed once per process, chained to the ones installed
 /// before) and this thread's ODE data (once per thread). Call before any other ODE call.
@@ -53,5 +51,4 @@ class OdeCallScope {
   OdeCallScope& operator=(const OdeCallScope&) = delete;
 };
 
-}  // namespace detail
-}  // namespace ernest::dynamics
+}  // namespace ernest::solver

@@ -1,6 +1,6 @@
 // Our own step of the rover's island: what ODE 0.16's dWorldStep (ode/src/step.cpp, dxStepIsland)
 // computes for the rover's six bodies and the joint types it uses, built for this structure and
-// solved through the sparse solver (solve_sparse, ode_lcp.hpp) directly (internal to cpp/dynamics).
+// solved through the sparse solver (solve_sparse, sparse_lcp.hpp) directly (used by cpp/dynamics).
 //
 // Why (benchmarks/RESULTS.md, "Where a step goes"): a time profile put ODE's own
 // part of dWorldStep at ~45 % of a step on flat soil, of which forming A = J M⁻¹ Jᵀ joint pair by
@@ -24,10 +24,11 @@
 #include <cstdint>
 #include <limits>
 
-#include "ernest/dynamics/ode_lcp.hpp"
-#include "ernest/dynamics/sparse_ldlt.hpp"
+#include "ernest/solver/lcp_workspace.hpp"
+#include "ernest/solver/sparse_lcp.hpp"
+#include "ernest/solver/sparse_ldlt.hpp"
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 class IslandStep {
  public:
@@ -219,4 +220,4 @@ class IslandStep {
   std::array<int, kMaxRows> n_diag_{};
 };
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

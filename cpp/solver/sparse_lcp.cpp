@@ -1,53 +1,20 @@
-// ODE's LCP entry point, bound to the sparse solver (see ode_lcp.hpp for why and when).
-#include "ernest/dynamics/ode_lcp.hpp"
+// The LCP as one sparse linear system (solve_sparse, sparse_lcp.hpp says what and when): the
+// pattern of the solved rows for a new plan, the guessed active set solved with SparseLdlt, the
+// friction rows at a bound as a low-rank correction (solve_clamped), and Dantzig's end checks.
+#include "ernest/solver/sparse_lcp.hpp"
 
-#include <dlfcn.h>
 #include <emmintrin.h>
 #include <ode/ode.h>
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <cstdio>
-#include <memory>
-#include <stdexcept>
-#include <string>
+#include <cstdint>
 
-struct dxWorldProcessMemArena;  // ODE's, opaque here
-
-// ODE 0.16 (src/lcp.cpp): solve A x = b + w with lo <= x <= hi and complementarity, A the n x n
-// lower triangle with row stride dPAD(n); b and x interleaved in pairsbx (b, x per row), lo and
-// hi in pairslh; findex[i] >= 0 makes row i's bounds friction bounds of row findex[i]; the first
-// nub rows are unbounded. The name must mangle exactly as ODE's (the linker matches it).
-__attribute__((visibility("default"))) void dxSolveLCP(dxWorldProcessMemArena* memarena,
-                                                       unsigned n, dReal* A, dReal* pairsbx,
-                                                       dReal* outer_w, unsigned nub,
-                                                       dReal* pairslh, int* findex);
-
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 namespace {
-
-static_assert(sizeof(dReal) == sizeof(double), "ODE must be built in double precision");
-using OdeSolve = void (*)(dxWorldProcessMemArena*, unsigned, dReal*, dReal*, dReal*, unsigned,
-                          dReal*, int*);
-constexpr const char* kSymbol = "_Z10dxSolveLCPP22dxWorldProcessMemArenajPdS1_S1_jS1_Pi";
-
-thread_local LcpWorkspace* current = nullptr;
-thread_local bool reached = false;  // our dxSolveLCP ran on this thread (sparse_lcp_active)
-
-// ODE's own solver: the next definition after ours, else the one in libode itself.
-OdeSolve ode_solver() {
-  static const OdeSolve fn = [] {
-    auto f = reinterpret_cast<OdeSolve>(dlsym(RTLD_NEXT, kSymbol));
-    if (f == nullptr || f == &::dxSolveLCP) {
-      void* lib = dlopen("libode.so.8", RTLD_LAZY | RTLD_NOLOAD);
-      if (lib) f = reinterpret_cast<OdeSolve>(dlsym(lib, kSymbol));
-    }
-    return f == &::dxSolveLCP ? nullptr : f;
-  }();
-  return fn;
-}
 
 // Row i's place among the solved rows (ascending), or -1 if it is not solved.
 int pos_of(LdltPlan::Mask solved, unsigned i) {
@@ -204,13 +171,12 @@ bool solve_clamped(LcpWorkspace& ws, unsigned n, const double* A, unsigned strid
 // bound, or there are over LdltPlan::kMaxRows (128) rows.
 //
 // Friction rows (findex[i] = k: |x_i| <= mu_i x_k, ODE's pyramid; with ws.coulomb_friction) are
-// guessed too: inside (solved with the others, checked against mu_i times the final x_k) or at
-// a bound, x_i = +-mu_i x_k, a linear relation with the normal force x_k that the solve must
-// respect (seed 004 §3.4, Coulomb's law with the final normal force, as solve_coulomb below for
-// rigid ground). With y = A_SS⁻¹ b_S and c_i = A_SS⁻¹ A_Si for each friction row at a bound,
-// x_S = y - sum_i c_i s_i mu_i x_k(i): the normal forces it involves solve a small dense system
-// (I + G) x_K = y_K first. Checked as Dantzig's method ends: at +bound w_i <= 0, at -bound
-// w_i >= 0.
+// guessed too: inside (solved with the others, checked against mu_i times the final x_k) or at a
+// bound, x_i = +-mu_i x_k, a linear relation with the normal force x_k that the solve must respect
+// (seed 004 §3.4, Coulomb's law with the final normal force, as solve_coulomb (coulomb_lcp.cpp) for
+// rigid ground). With y = A_SS⁻¹ b_S and c_i = A_SS⁻¹ A_Si for each friction row at a bound, x_S =
+// y - sum_i c_i s_i mu_i x_k(i): the normal forces it involves solve a small dense system (I + G)
+// x_K = y_K first. Checked as Dantzig's method ends: at +bound w_i <= 0, at -bound w_i >= 0.
 bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx, double* outer_w,
                   unsigned nub, const double* pairslh, const int* findex,
                   std::uint64_t kept_factor) {
@@ -355,268 +321,4 @@ bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx
   return true;
 }
 
-namespace {
-
-// Seed 004 §3.4's Coulomb friction bounds a friction row i (findex[i] = k) by mu_i times the
-// final normal force x_k. ODE's Dantzig solver takes x_k from before it adds the friction rows,
-// which can be tens of per cent off, so a sliding contact's friction follows the pivoting order,
-// not the normal force. solve_coulomb corrects ODE's answer: from the active set it found, each
-// row is free (solved), at a constant bound, or, for friction, at +-mu_i x_k (a linear relation:
-// x_k's column gains +-mu_i times row i's), which makes one dense non-symmetric linear solve per
-// guess; the result is checked as Dantzig's method ends (free rows inside their bounds, rows at a
-// bound pushed onto it) and a wrong row flipped, kAttempts times at most. Returns false, leaving
-// ODE's answer, if no guess held. ws.a_copy, bx_copy, lh_copy, findex_copy: the problem before
-// ODE's solve.
-bool solve_coulomb(LcpWorkspace& ws, unsigned n, unsigned nub, double* pairsbx,
-                   double* outer_w) {
-  constexpr int kMax = LdltPlan::kMaxRows;
-  constexpr int kAttempts = 6;
-  constexpr std::int8_t kIn = 0, kHi = 1, kLo = 2;  // a row's place: inside, at hi, at lo
-  using Mat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMax, kMax>;
-  using Vec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMax, 1>;
-  const unsigned stride = dPAD(n);
-  const double* a = ws.a_copy.data();
-  const double* lh = ws.lh_copy.data();
-  const int* findex = ws.findex_copy.data();
-  const auto A = [&](unsigned i, unsigned j) {  // ODE fills the lower triangle
-    return i >= j ? a[i * stride + j] : a[j * stride + i];
-  };
-  const auto b = [&](unsigned i) { return ws.bx_copy[2 * i]; };
-  const auto friction = [&](unsigned i) { return i >= nub && findex[i] >= 0; };
-  const auto unbounded = [&](unsigned i) {
-    return i < nub || (!friction(i) && lh[2 * i] == -dInfinity && lh[2 * i + 1] == dInfinity);
-  };
-  std::array<double, kMax> x, w;
-  std::array<std::int8_t, kMax> place;
-  std::array<int, kMax> col;
-  double bscale = 1.0;
-  for (unsigned i = 0; i < n; ++i) {
-    x[i] = pairsbx[2 * i + 1];
-    bscale = std::max(bscale, std::abs(b(i)));
-  }
-  const auto residuals = [&] {
-    for (unsigned i = 0; i < n; ++i) {
-      double s = -b(i);
-      for (unsigned j = 0; j < n; ++j) s += A(i, j) * x[j];
-      w[i] = s;
-    }
-  };
-  const double tol_w = 1e-9 * bscale;
-  // ODE's active set: friction rows pushed by their residual, others where ODE left them. With
-  // no friction row at a bound ODE's answer is already Coulomb's (its bounds were not used).
-  residuals();
-  bool clamped = false;
-  for (unsigned i = 0; i < n && !clamped; ++i) {
-    clamped = friction(i) && (std::abs(w[i]) > tol_w ||
-                              std::abs(x[i]) > std::abs(lh[2 * i + 1] * x[findex[i]]));
-  }
-  if (!clamped) return true;
-  for (unsigned i = 0; i < n; ++i) {
-    place[i] = kIn;
-    if (unbounded(i)) continue;
-    if (friction(i)) {
-      if (w[i] < -tol_w && x[i] > 0.0) place[i] = kHi;
-      if (w[i] > tol_w && x[i] < 0.0) place[i] = kLo;
-    } else if (x[i] == lh[2 * i + 1]) {
-      place[i] = kHi;
-    } else if (x[i] == lh[2 * i]) {
-      place[i] = kLo;
-    }
-  }
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    int m = 0;
-    for (unsigned i = 0; i < n; ++i) col[i] = place[i] == kIn ? m++ : -1;
-    Mat M = Mat::Zero(m, m);
-    Vec r(m);
-    for (unsigned i = 0; i < n; ++i) {
-      if (col[i] < 0) continue;
-      double ri = b(i);
-      for (unsigned j = 0; j < n; ++j) {
-        const double aij = A(i, j);
-        if (place[j] == kIn) {
-          M(col[i], col[j]) += aij;
-        } else if (friction(j)) {  // x_j = +-mu_j x_k
-          const unsigned k = static_cast<unsigned>(findex[j]);
-          const double s = (place[j] == kHi ? 1.0 : -1.0) * std::abs(lh[2 * j + 1]);
-          if (place[k] == kIn) {
-            M(col[i], col[k]) += s * aij;
-          } else {
-            ri -= aij * s * lh[2 * k + (place[k] == kHi ? 1 : 0)];
-          }
-        } else {
-          ri -= aij * lh[2 * j + (place[j] == kHi ? 1 : 0)];
-        }
-      }
-      r[col[i]] = ri;
-    }
-    Vec y;
-    if (m > 0) y = Eigen::PartialPivLU<Mat>(M).solve(r);
-    double xscale = 1.0;
-    for (unsigned i = 0; i < n; ++i) {
-      if (place[i] == kIn) x[i] = y[col[i]];
-      else if (!friction(i)) x[i] = lh[2 * i + (place[i] == kHi ? 1 : 0)];
-    }
-    for (unsigned i = 0; i < n; ++i) {
-      if (place[i] != kIn && friction(i))
-        x[i] = (place[i] == kHi ? 1.0 : -1.0) * std::abs(lh[2 * i + 1]) * x[findex[i]];
-      if (!std::isfinite(x[i])) return false;
-      xscale = std::max(xscale, std::abs(x[i]));
-    }
-    residuals();
-    const double tol_x = 1e-9 * xscale;
-    bool wrong = false;
-    for (unsigned i = 0; i < n; ++i) {
-      if (unbounded(i)) continue;
-      double lo = lh[2 * i], hi = lh[2 * i + 1];
-      if (friction(i)) {
-        hi = std::abs(hi) * std::abs(x[findex[i]]);
-        lo = -hi;
-      }
-      std::int8_t want = place[i];
-      if (place[i] == kIn) {
-        if (x[i] > hi + tol_x) want = kHi;
-        if (x[i] < lo - tol_x) want = kLo;
-      } else if ((place[i] == kHi && w[i] > tol_w) || (place[i] == kLo && w[i] < -tol_w)) {
-        want = kIn;  // pulled off its bound
-      }
-      wrong = wrong || want != place[i];
-      place[i] = want;
-    }
-    if (wrong) continue;
-    for (unsigned i = 0; i < n; ++i) pairsbx[2 * i + 1] = x[i];
-    if (outer_w) {
-      for (unsigned i = 0; i < n; ++i) outer_w[i] = place[i] == kIn ? 0.0 : w[i];
-    }
-    return true;
-  }
-  return false;
-}
-
-}  // namespace
-
-LcpScope::LcpScope(LcpWorkspace* ws) { current = ws; }
-LcpScope::~LcpScope() { current = nullptr; }
-
-namespace {
-
-thread_local bool probing = false;  // sparse_lcp_active() is stepping its probe world
-
-// One step of a probe world through the hook: a tumbling box held at a point by a ball joint
-// (three unbounded rows) above a frictionless contact that separates (a row resting at its
-// zero bound). Returns the box's velocities; `sparse` chooses the solver.
-std::array<double, 6> probe_step(bool sparse, LcpWorkspace& ws) {
-  dWorldID w = dWorldCreate();
-  dWorldSetGravity(w, 0.0, 0.0, -9.81);
-  dJointGroupID group = dJointGroupCreate(0);
-  dBodyID b = dBodyCreate(w);
-  dMass m;
-  dMassSetBoxTotal(&m, 2.0, 0.3, 0.2, 0.1);
-  dBodySetMass(b, &m);
-  dBodySetPosition(b, 0.1, 0.0, 0.5);
-  dBodySetLinearVel(b, 0.2, -0.1, 0.5);
-  dBodySetAngularVel(b, 1.0, 2.0, -0.5);
-  dJointID ball = dJointCreateBall(w, group);
-  dJointAttach(ball, b, nullptr);
-  dJointSetBallAnchor(ball, 0.0, 0.05, 0.55);
-  dContact c{};
-  c.geom.pos[2] = 0.4;
-  c.geom.normal[2] = 1.0;
-  dJointAttach(dJointCreateContact(w, group, &c), b, nullptr);
-  ws.enabled = sparse;
-  {
-    const LcpScope scope(&ws);
-    dWorldStep(w, 0.01);
-  }
-  std::array<double, 6> v;
-  for (int k = 0; k < 3; ++k) {
-    v[k] = dBodyGetLinearVel(b)[k];
-    v[3 + k] = dBodyGetAngularVel(b)[k];
-  }
-  dJointGroupDestroy(group);
-  dWorldDestroy(w);
-  return v;
-}
-
-}  // namespace
-
-namespace {
-
-// The probe's verdict: "" when the sparse path is active, else why not (for the warning).
-const std::string& probe_verdict() {
-  static const std::string verdict = [] {
-    // ODE's calls reach the hook, ODE's own solver is there to fall back on, and on a probe
-    // step the sparse path answers as ODE's solver does (a check that ODE's data layout is the
-    // one solve_sparse() reads). Otherwise every solve goes to ODE.
-    probing = true;
-    reached = false;
-    auto ws = std::make_unique<LcpWorkspace>();
-    const std::array<double, 6> ode = probe_step(false, *ws);
-    const bool hooked = reached;
-    const std::array<double, 6> ours = probe_step(true, *ws);
-    probing = false;
-    std::string why;
-    if (!hooked) {
-      why = "ODE's constraint solves do not reach ernest's dxSolveLCP (this libode binds its "
-            "call internally, or names it otherwise than " + std::string(kSymbol) + ")";
-    } else {
-      if (ode_solver() == nullptr)  // ODE would get no solver at all: refuse to run
-        throw std::runtime_error("ODE's dxSolveLCP (" + std::string(kSymbol) + ") not found");
-      bool same = ws->sparse == 1 && ws->dense == 1;
-      for (int k = 0; k < 6; ++k)
-        same = same && std::abs(ours[k] - ode[k]) <= 1e-12 * (1.0 + std::abs(ode[k]));
-      if (!same)
-        why = "the sparse solver's answer to a probe step differs from ODE's (this libode's "
-              "data layout is not ODE 0.16's)";
-    }
-    // Once per process: a warning, not an error (the simulation still runs, on ODE's solver).
-    if (!why.empty())
-      std::fprintf(stderr,
-                   "ernest: warning: the fast constraint solver is off: %s; every step uses "
-                   "ODE's Dantzig solver: slower, and friction bounded by ODE's approximation "
-                   "(not corrected to Coulomb's law with the final normal force). See "
-                   "ARCHITECTURE.md, \"The solver hook\".\n",
-                   why.c_str());
-    return why;
-  }();
-  return verdict;
-}
-
-}  // namespace
-
-bool sparse_lcp_active() { return probe_verdict().empty(); }
-
-const std::string& sparse_lcp_inactive_reason() { return probe_verdict(); }
-
-}  // namespace ernest::dynamics::detail
-
-void dxSolveLCP(dxWorldProcessMemArena* memarena, unsigned n, dReal* A, dReal* pairsbx,
-                dReal* outer_w, unsigned nub, dReal* pairslh, int* findex) {
-  using namespace ernest::dynamics::detail;
-  reached = true;
-  LcpWorkspace* ws = current;
-  if (ws && ws->enabled && (probing || sparse_lcp_active()) &&
-      solve_sparse(*ws, n, A, pairsbx, outer_w, nub, pairslh, findex)) {
-    ++ws->sparse;
-    return;
-  }
-  if (ws) ++ws->dense;
-  const OdeSolve ode = ode_solver();
-  if (!ode) {  // unreachable: sparse_lcp_active() refuses to run without it
-    for (unsigned i = 0; i < n; ++i) pairsbx[2 * i + 1] = 0.0;
-    return;
-  }
-  // Friction rows (within a scope, and not too many rows): keep the problem for solve_coulomb.
-  bool coulomb = false;
-  if (ws && ws->exact_friction && findex &&
-      n <= static_cast<unsigned>(ernest::dynamics::LdltPlan::kMaxRows)) {
-    for (unsigned i = nub; i < n && !coulomb; ++i) coulomb = findex[i] >= 0;
-  }
-  if (coulomb) {
-    std::copy(A, A + static_cast<std::size_t>(n) * dPAD(n), ws->a_copy.begin());
-    std::copy(pairsbx, pairsbx + 2 * n, ws->bx_copy.begin());
-    std::copy(pairslh, pairslh + 2 * n, ws->lh_copy.begin());
-    std::copy(findex, findex + n, ws->findex_copy.begin());
-  }
-  ode(memarena, n, A, pairsbx, outer_w, nub, pairslh, findex);
-  if (coulomb && !solve_coulomb(*ws, n, nub, pairsbx, outer_w)) ++ws->friction_unresolved;
-}
+}  // namespace ernest::solver

@@ -1,27 +1,17 @@
-// The constraint solve of dWorldStep through a sparse LDLᵀ (internal to cpp/dynamics).
-//
-// dWorldStep hands ODE's Dantzig LCP solver the dense matrix A = J M⁻¹ Jᵀ of all rows. With the
-// guessed active set (rover_step.cpp) almost every row is unbounded, and the rest are contact
-// normals bounded below by zero, whose state (pushing or not) repeats from step to step, so the
-// LCP is one linear system plus a check per bounded row; ODE still factorises A densely,
-// permuting rows one at a time. ode_lcp.cpp defines ODE's (exported, called through the PLT)
-// dxSolveLCP, so that the dynamic linker binds ODE's call to it: while a LcpScope is alive on
-// the thread, such problems are solved with SparseLdlt (the bounded rows guessed as they ended
-// last time) and checked exactly as Dantzig's method would end; anything else (friction with
-// findex unless LcpWorkspace::coulomb_friction, a bounded row without a zero bound, guesses that keep failing, more than 128 rows, no
-// scope) goes to ODE's own solver, found with dlsym. ODE bounds a friction row by mu times the
-// normal force found before the friction rows; within a scope that asks for it (exact_friction)
-// its answer is then corrected to Coulomb's law with the final normal force (solve_coulomb).
+// The constraint solver's state between steps (LcpWorkspace): the remembered LDLᵀ plans and
+// active-set guesses (lcp_workspace.cpp), the switches a simulator sets (enabled, exact_friction,
+// coulomb_friction) and the counters of what the solves did (sparse, dense, plans_made, ...).
+// One per simulation; solve_sparse (sparse_lcp.hpp), solve_coulomb (coulomb_lcp.hpp) and the
+// solver hook (ode_lcp.hpp) work in it.
 #pragma once
 
 #include <array>
 #include <cstdint>
-#include <string>
 #include <vector>
 
-#include "ernest/dynamics/sparse_ldlt.hpp"
+#include "ernest/solver/sparse_ldlt.hpp"
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 /// Working data of one simulation's constraint solves, and what they did.
 ///
@@ -58,13 +48,13 @@ struct LcpWorkspace {
   std::uint64_t sparse = 0;    // solves done here
   std::uint64_t dense = 0;     // solves handed to ODE's Dantzig solver
   /// Correct ODE's friction (findex) bounds to mu times the final normal force (solve_coulomb in
-  /// ode_lcp.cpp). Set for rigid ground, whose sliding tyres need it; off on soil, where only rock
-  /// contacts have friction rows and the correction (a dense solve of every rock-contact step)
+  /// coulomb_lcp.cpp). Set for rigid ground, whose sliding tyres need it; off on soil, where only
+  /// rock contacts have friction rows and the correction (a dense solve of every rock-contact step)
   /// would double the rock field's step time.
   bool exact_friction = false;
-  /// Solve friction (findex) rows in the sparse path too, each guessed inside its bound or at
-  /// +-mu times its contact's final normal force (Coulomb's law, as solve_coulomb; solve_sparse
-  /// in ode_lcp.cpp). Off: such problems go to ODE's Dantzig solver (and its approximate bound).
+  /// Solve friction (findex) rows in the sparse path too, each guessed inside its bound or at +-mu
+  /// times its contact's final normal force (Coulomb's law, as solve_coulomb; solve_sparse in
+  /// sparse_lcp.cpp). Off: such problems go to ODE's Dantzig solver (and its approximate bound).
   /// Set on soil, where only the rocks' contacts have friction rows.
   bool coulomb_friction = false;
   /// A_SS⁻¹ A_Si of the friction rows at a bound (solve_sparse), one column per row.
@@ -78,7 +68,7 @@ struct LcpWorkspace {
   };
   ClampedColumns clamped;
   /// Dense solves with friction (findex) rows whose bounds could not be made mu times the final
-  /// normal force (ODE's approximate answer stands; see solve_coulomb in ode_lcp.cpp).
+  /// normal force (ODE's approximate answer stands; see solve_coulomb in coulomb_lcp.cpp).
   std::uint64_t friction_unresolved = 0;
   /// The problem as ODE received it (its solver overwrites A), for solve_coulomb.
   std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> a_copy{};
@@ -107,35 +97,4 @@ struct LcpWorkspace {
   void load(const std::vector<std::uint64_t>& in);
 };
 
-/// ODE's LCP (A x = b + w, lo <= x <= hi with complementarity; A's lower triangle, row stride
-/// dPAD(n); b and x interleaved in pairsbx, lo and hi in pairslh; findex: friction rows; the first
-/// nub rows unbounded) solved with the sparse LDLᵀ and the remembered guesses of `ws`, checked as
-/// Dantzig's method ends (ode_lcp.cpp). Returns false, the outputs untouched, if it cannot (then
-/// ODE's Dantzig solver must). Called by the hook below, and directly by our own island step
-/// (island_step.hpp). Does not count the solve (LcpWorkspace::sparse): the caller does.
-/// kept_factor: ws.factors after an earlier call with this very A (bit for bit; IslandStep::
-/// resolve); while no factorisation happened since, a guess that solves the rows of that call's
-/// last factor uses it as it is (the same bits as factorising A again). 0: none.
-bool solve_sparse(LcpWorkspace& ws, unsigned n, const double* A, double* pairsbx, double* outer_w,
-                  unsigned nub, const double* pairslh, const int* findex,
-                  std::uint64_t kept_factor = 0);
-
-/// While alive, dWorldStep calls on this thread solve through `ws` (not nested).
-class LcpScope {
- public:
-  explicit LcpScope(LcpWorkspace* ws);
-  ~LcpScope();
-  LcpScope(const LcpScope&) = delete;
-  LcpScope& operator=(const LcpScope&) = delete;
-};
-
-/// Whether ODE's calls reach ode_lcp.cpp's solver in this process (the symbol interposition
-/// worked) and it answers a probe step as ODE's own solver does; if not, every solve goes to
-/// ODE, and the probe prints one warning on stderr. Steps a tiny world twice, once, on first use
-/// (ODE must be initialised: init_ode_once); throws std::runtime_error if ODE's calls reach the
-/// hook but ODE's own solver cannot be found. Public face: fast_lcp_active() (ode_init.hpp).
-bool sparse_lcp_active();
-/// Why sparse_lcp_active() is false ("" when it is true).
-const std::string& sparse_lcp_inactive_reason();
-
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

@@ -6,12 +6,12 @@
 #include <array>
 #include <cstdint>
 
-namespace ernest::dynamics {
+namespace ernest::solver {
 
 /// Symbolic analysis of one sparsity pattern: minimum-degree order, the pattern of the factor,
 /// and the trailing clique that is factorised densely. A pure function of the pattern: the
 /// rounding of a factorisation depends on the plan, so a caller wanting bit-exact repeats must
-/// choose plans reproducibly (ode_lcp.hpp keeps their patterns in the snapshot).
+/// choose plans reproducibly (lcp_workspace.hpp keeps their patterns in the snapshot).
 class LdltPlan {
  public:
   /// The rover's ~50 rows, and 12 more per wheel on a rock (4 collision points x 3 rows): two
@@ -119,4 +119,4 @@ class SparseLdlt {
   alignas(16) std::array<double, LdltPlan::kMaxRows * LdltPlan::kMaxRows> e_{};
 };
 
-}  // namespace ernest::dynamics
+}  // namespace ernest::solver

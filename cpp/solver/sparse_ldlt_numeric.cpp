@@ -2,7 +2,7 @@
 // columns entry by entry), supernodes and the trailing clique through one dense kernel
 // (dense_ldlt; ODE's dFactorLDLT and dSolveL1 cost 1.3x as many instructions at the rover's
 // sizes), and the solves. The plan (order, patterns, copy lists) is sparse_ldlt.cpp.
-#include "ernest/dynamics/sparse_ldlt.hpp"
+#include "ernest/solver/sparse_ldlt.hpp"
 
 #include <emmintrin.h>
 
@@ -14,7 +14,7 @@
 
 #include "ernest/common/vector_math.hpp"
 
-namespace ernest::dynamics {
+namespace ernest::solver {
 
 namespace {
 // Supernodes at least this wide are factorised with the dense kernel (factor_supernode).
@@ -393,4 +393,4 @@ void SparseLdlt::solve_many(double* x, int k, int stride) const {
   }
 }
 
-}  // namespace ernest::dynamics
+}  // namespace ernest::solver

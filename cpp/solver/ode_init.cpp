@@ -1,5 +1,5 @@
 // ODE's process-wide set-up: initialisation and chained handlers (see ode_init.hpp).
-#include "ernest/dynamics/ode_init.hpp"
+#include "ernest/solver/ode_init.hpp"
 
 #include <ode/ode.h>
 
@@ -7,11 +7,9 @@
 #include <cstdio>
 #include <mutex>
 
-#include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/solver/ode_lcp.hpp"
 
-namespace ernest::dynamics {
-
-namespace detail {
+namespace ernest::solver {
 
 thread_local std::uint64_t ode_lcp_messages = 0;
 
@@ -92,16 +90,14 @@ std::uint64_t ode_lcp_message_count() { return ode_lcp_messages; }
 OdeCallScope::OdeCallScope() { ++own_calls; }
 OdeCallScope::~OdeCallScope() { --own_calls; }
 
-}  // namespace detail
-
 bool fast_lcp_active() {
-  detail::init_ode_once();
-  return detail::sparse_lcp_active();
+  init_ode_once();
+  return sparse_lcp_active();
 }
 
 std::string fast_lcp_inactive_reason() {
-  detail::init_ode_once();
-  return detail::sparse_lcp_inactive_reason();
+  init_ode_once();
+  return sparse_lcp_inactive_reason();
 }
 
-}  // namespace ernest::dynamics
+}  // namespace ernest::solver

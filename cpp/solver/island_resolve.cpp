@@ -4,9 +4,9 @@
 #include <algorithm>
 #include <cstring>
 
-#include "ernest/dynamics/island_step.hpp"
+#include "ernest/solver/island_step.hpp"
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 namespace {
 
@@ -107,4 +107,4 @@ void IslandStep::attempt_caps(const Joint& jt, double fps) {
   }
 }
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

@@ -1,4 +1,4 @@
-// Bodies' quaternions as ODE stores them (internal to cpp/dynamics): ODE normalises a quaternion
+// Bodies' quaternions as ODE stores them (used by cpp/dynamics): ODE normalises a quaternion
 // whenever it is set (dBodySetQuaternion: dxSafeNormalize4, then the rotation matrix from it), so
 // a restored state is only bit-identical if the stored quaternion is a fixed point of that
 // normalisation (it need not be: normalisation can alternate between two neighbours).
@@ -6,7 +6,7 @@
 
 #include <ode/ode.h>
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 /// Moves body b's quaternion to a nearby fixed point of ODE's normalisation: its largest
 /// component nudged by a few ulps (a 1e-16 change) until setting it returns it unchanged; the
@@ -21,4 +21,4 @@ void canonicalise_quaternion(dBodyID b);
 /// lies within the nudges (never seen).
 bool fixed_point_quaternion(const dReal* q, dReal out[4]);
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

@@ -1,4 +1,4 @@
-// The constraint solver's memory between steps (ode_lcp.hpp's LcpWorkspace): the remembered
+// The constraint solver's memory between steps (lcp_workspace.hpp's LcpWorkspace): the remembered
 // LDLᵀ plans (round robin over kPlans row sets, grown when a new pattern falls outside), the
 // remembered active-set guesses, and both carried through a Snapshot (save / load).
 #include <algorithm>
@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "ernest/dynamics/ode_lcp.hpp"
+#include "ernest/solver/lcp_workspace.hpp"
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 LdltPlan* LcpWorkspace::find(const unsigned* rows, int n, int stride) {
   for (int q = 0; q < kPlans; ++q)  // (a constant count: unrolled)
@@ -148,4 +148,4 @@ void LcpWorkspace::load(const std::vector<std::uint64_t>& in) {
   next_guess = static_cast<int>(ng);
 }
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver

@@ -2,18 +2,18 @@
 // island_rows.cpp: each joint's rows). Stage by stage as ODE 0.16.2's dxStepIsland
 // (ode/src/step.cpp): 0, gravity and the implicit gyroscopic torque into the accumulators and the
 // world-frame inverse inertias; 2a, the joints' rows (rhs and CFM over h); 2b/2c, A = J M⁻¹ Jᵀ +
-// CFM and rhs = c / h - J (v / h + M⁻¹ f); 3, the solve (here solve_sparse, ode_lcp.hpp); 4, the
-// constraint forces Jᵀ lambda (and the joints' feedback), the velocity update and dxStepBody's
+// CFM and rhs = c / h - J (v / h + M⁻¹ f); 3, the solve (here solve_sparse, sparse_lcp.hpp); 4,
+// the constraint forces Jᵀ lambda (and the joints' feedback), the velocity update and dxStepBody's
 // integration (ode/src/util.cpp), written back with ODE's setters. resolve(): the same problem
 // again with new targets and forces (island_resolve.cpp: its checks).
 #include <algorithm>
 #include <cmath>
 
 #include "ernest/common/vector_math.hpp"
-#include "ernest/dynamics/island_step.hpp"
-#include "ernest/dynamics/ode_quaternion.hpp"
+#include "ernest/solver/island_step.hpp"
+#include "ernest/solver/ode_quaternion.hpp"
 
-namespace ernest::dynamics::detail {
+namespace ernest::solver {
 
 // The step's parts, inlined into step() and resolve() (the step's path as one function, as before
 // resolve() shared them).
@@ -339,4 +339,4 @@ void IslandStep::integrate(double h) {
 
 #undef ERNEST_INLINE
 
-}  // namespace ernest::dynamics::detail
+}  // namespace ernest::solver
