@@ -36,6 +36,16 @@ def _series(label, stroke=None, **kw):
     return U.Series(label=label, stroke=stroke, width=1.5, **kw) if stroke else U.Series(label=label)
 
 
+def setup_lights(server) -> None:
+    """Plain lights for software WebGL (a headless browser, a remote desktop): no shadows and no
+    image-based environment lighting, whose preparation tripled the first frame's time there
+    (benchmarks/RESULTS.md, "3D viewer"); a hemisphere light makes up the brightness."""
+    server.scene.configure_default_lights(True, cast_shadow=False)
+    server.scene.configure_environment_map(None)
+    server.scene.add_light_hemisphere("/lights/sky", sky_color=(255, 255, 255),
+                                      ground_color=(140, 125, 110), intensity=1.6)
+
+
 def add_terrain(server, heights, spacing, origin, obstacles, path=None, max_cells: int = 200):
     """The height map coloured by elevation under /terrain, the boxes under /obstacles and, given
     ``path`` (x0, y0, heading), the desired path under /path; returns their handles."""
@@ -75,8 +85,7 @@ class RoverScene:
         self.checkboxes: dict = {}
         self._static: list = []
         server.scene.set_up_direction("+z")
-        # no shadows: software WebGL (a headless browser, a remote desktop) draws in time
-        server.scene.configure_default_lights(True, cast_shadow=False)
+        setup_lights(server)
         for name in LAYERS:
             self.layers[name] = server.scene.add_frame(f"/{name}", show_axes=False)
         self._build_rover()

@@ -25,10 +25,10 @@ def _ground(terrain, xy: np.ndarray) -> np.ndarray:
 
 def cycle_recording(model, result, rocks, terrain, seed: int | None = None) -> Recording:
     """The recording of an executed gait cycle (``footfall_cycle.run``'s result, its rocks and the
-    planner's HeightMap). Needs frames: ``FootfallCycleOptions.execution.frame_interval > 0``."""
+    planner's HeightMap). Needs frames: ``FootfallCycleOptions.execution.frame_interval`` set."""
     t = np.asarray(result.frame_time, dtype=np.float64)
     if t.size == 0:
-        raise ValueError("result has no frames: set execution.frame_interval > 0 for a recording")
+        raise ValueError("result has no frames: set execution.frame_interval for a recording")
     n = t.size
     bodies = [np.asarray(b) for b in result.frame_body]
     qs = [np.asarray(q) for q in result.frame_q]
@@ -112,13 +112,13 @@ class WalkerScene:
     LAYERS = ("terrain", "obstacles", "walker", "support", "stability map", "leg path", "track")
 
     def __init__(self, server, rec: Recording):
-        from .scene import add_terrain
+        from .scene import add_terrain, setup_lights
 
         self.server = server
         self.rec = rec
         sc = server.scene
         sc.set_up_direction("+z")
-        sc.configure_default_lights(True, cast_shadow=False)
+        setup_lights(server)
         self.layers = {name: sc.add_frame("/" + name.replace(" ", "_"), show_axes=False)
                        for name in self.LAYERS}
         add_terrain(server, rec.heights, rec.spacing, rec.origin, rec.obstacles)
