@@ -138,6 +138,7 @@ ENTRY_POINTS = {
     "export": "ernest_cpp.rl.commands:export_policy",
     "stamp-policy": "ernest_cpp.rl.commands:stamp",
     "train-default": "ernest_cpp.rl.pipeline:train_default",
+    "view": "ernest_cpp.viewer.command:main",
 }
 
 

@@ -272,3 +272,20 @@ def test_live_view_port_from_the_environment(monkeypatch):
             LiveViewer.from_environment()
     with pytest.raises(ValueError, match="max_fps"):
         LiveViewer(port=0, max_fps=0)
+
+
+def test_view_from_python_draws_a_screenshot_or_names_the_file(recording, tmp_path):
+    from ernest_cpp.viewer import browser
+    from ernest_cpp.viewer.command import main
+
+    with pytest.raises(FileNotFoundError, match="no such recording"):
+        main(recording=str(tmp_path / "none.npz"), screenshot=str(tmp_path / "x.png"))
+    if browser.find_chromium() is None:
+        pytest.skip("chromium and chromedriver are not installed (./run test installs them)")
+    path, _ = recording
+    png = tmp_path / "view.png"
+    assert main(recording=path, screenshot=str(png), time=4.0, port=0, size="800x500") == 0
+    from PIL import Image
+
+    img = np.asarray(Image.open(png).convert("RGB"))
+    assert img.shape[1] == 800 and browser.scene_drawn(img)

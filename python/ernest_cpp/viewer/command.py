@@ -88,3 +88,13 @@ def add_parser(sub) -> None:
     p.add_argument("--size", type=_size, default=(960, 600),
                    help="screenshot size WIDTHxHEIGHT (default 960x600)")
     p.set_defaults(func=run)
+
+
+def main(**options) -> int:
+    """``ernest view`` from Python: one keyword per option, named as on the command line with
+    underscores (``ernest view --help``), checked as there (``cli.run``), e.g.
+    ``main(recording="ep.npz", screenshot="view.png", time=20)``; without ``screenshot`` it
+    serves until Ctrl-C. Returns the exit status; errors raise."""
+    from ..cli import run as run_command
+
+    return run_command("view", **options)
