@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "bindings.hpp"
+#include "ernest/common/validation.hpp"
 #include "interrupt.hpp"
 #include "exclusive.hpp"
 #include "ernest/walker_sim/footfall_cycle.hpp"
@@ -108,7 +109,16 @@ void bind_walker_sim(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("joint_speed", &ExecutionOptions::joint_speed, "[rad/s]")
       .def_readwrite("pause", &ExecutionOptions::pause, "hold at each waypoint [s]")
-      .def_readwrite("frame_interval", &ExecutionOptions::frame_interval, "animation frames every [s] (0: none)")
+      .def_property(
+          "frame_interval", [](const ExecutionOptions& o) { return o.frame_interval; },
+          [](ExecutionOptions& o, std::optional<double> dt) {
+            if (dt) {
+              ernest::require_in_range("ExecutionOptions", "frame_interval", *dt, 0.0, 60.0);
+              ernest::require_positive("ExecutionOptions", "frame_interval", *dt);
+            }
+            o.frame_interval = dt;
+          },
+          "animation frames every [s], (0, 60]; None (default): no frames")
       .def("validate", &ExecutionOptions::validate, "Raise ValueError naming the first invalid field.");
 
   py::class_<ExecutionTrace>(m, "ExecutionTrace", "What the swing wheel did in the simulator.")
@@ -135,7 +145,7 @@ void bind_walker_sim(py::module_& m) {
 
   m.def("execute_configuration_path", guarded("execute_configuration_path", &execute_configuration_path), "sim"_a, "leg"_a, "path"_a,
         "options"_a = ExecutionOptions{}, py::call_guard<py::gil_scoped_release, interruptible>(),
-        "Execute whole-robot configurations (every leg at once); trace wheel `leg` (-1: none).");
+        "Execute whole-robot configurations (every leg at once); trace wheel `leg` (None: none).");
 
   py::class_<GaitExecution>(m, "GaitExecution", "One executed gait cycle.")
       .def_readonly("steps", &GaitExecution::steps)
@@ -214,7 +224,13 @@ void bind_walker_sim(py::module_& m) {
       .def_readwrite("torque_preference", &FootfallCycleOptions::torque_preference,
                      "candidates by distance + this x peak torque fraction [m], [0, 100] (§7.1)")
       .def_readwrite("execute", &FootfallCycleOptions::execute, "False: plan only (no simulator)")
-      .def_readwrite("steps", &FootfallCycleOptions::steps, "first steps of the cycle to take (0: all)")
+      .def_property(
+          "steps", [](const FootfallCycleOptions& o) { return o.steps; },
+          [](FootfallCycleOptions& o, std::optional<int> n) {
+            if (n) ernest::require_in_range("FootfallCycleOptions", "steps", *n, 1, 1000);
+            o.steps = n;
+          },
+          "first steps of the cycle to take, [1, legs]; None (default): one per leg")
       .def_readwrite("step", &FootfallCycleOptions::step, "footfall.StepOptions")
       .def_readwrite("sim", &FootfallCycleOptions::sim)
       .def_readwrite("execution", &FootfallCycleOptions::execution)

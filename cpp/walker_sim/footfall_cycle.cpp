@@ -87,7 +87,7 @@ void FootfallCycleOptions::validate(int joints) const {
   require_in_range(o, "candidate_spacing", candidate_spacing, 0.0, 2.0);
   require_in_range(o, "settle_time", settle_time, 0.0, 60.0);
   require_in_range(o, "torque_preference", torque_preference, 0.0, 100.0);
-  require_in_range(o, "steps", steps, 0, 1000);
+  if (steps) require_in_range(o, "steps", *steps, 1, 1000);
   step.validate(joints);
   sim.validate();
   execution.validate();
@@ -119,9 +119,12 @@ FootfallCycleResult run_footfall_cycle(const walker::WalkerModel& model, const d
     out.frame_q.insert(out.frame_q.end(), t.frame_q.begin(), t.frame_q.end());
   };
   std::vector<int> order = walker::reverse_wave_sequence(model, o.heading);
-  require(o.steps <= model.legs(), "FootfallCycleOptions: steps = " + std::to_string(o.steps) +
-                                       " is outside [0, " + std::to_string(model.legs()) + "]");
-  if (o.steps > 0) order.resize(o.steps);
+  if (o.steps) {
+    require(*o.steps <= model.legs(), "FootfallCycleOptions.steps = " + std::to_string(*o.steps) +
+                                          " is outside the allowed range [1, " +
+                                          std::to_string(model.legs()) + "]");
+    order.resize(*o.steps);
+  }
   for (int leg : order) {
     FootfallStepRecord r;
     r.leg = leg;
@@ -171,7 +174,7 @@ FootfallCycleResult run_footfall_cycle(const walker::WalkerModel& model, const d
     Eigen::Isometry3d next = body;
     next.translation() += (o.stride / model.legs()) * dir;
     const Eigen::MatrixXd q_next = stance_for(model, terrain, next, q, feet, o.step.map);
-    const ExecutionTrace shift = !o.execute ? unexecuted : execute_configuration_path(sim, -1, {q, q_next}, o.execution);
+    const ExecutionTrace shift = !o.execute ? unexecuted : execute_configuration_path(sim, std::nullopt, {q, q_next}, o.execution);
     keep_frames(shift);
     sim_wall += since(t1);
     r.min_rock_clearance = std::min(r.min_rock_clearance, shift.min_any_rock_clearance);

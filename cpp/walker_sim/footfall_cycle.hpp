@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,7 +39,8 @@ struct FootfallCycleOptions {
   /// false: plan the cycle without executing it (no simulator; executed fields are NaN, the
   /// cycle's min_rock_clearance infinite).
   bool execute = true;
-  int steps = 0;                  ///< steps to take, the first ones of the cycle (0: every leg), [0, legs]
+  /// Steps to take, the first ones of the cycle, [1, legs]; unset: one per leg (the whole cycle).
+  std::optional<int> steps;
   footfall::StepOptions step;     ///< stability map, SBL, smoothing, sag model, sag_compensation
   WalkerSimOptions sim;
   ExecutionOptions execution;

@@ -25,7 +25,7 @@ GaitExecution execute_gait_cycle(WalkerSim& sim, const walker::GaitPlan& plan, i
       out.min_ground_clearance = std::min(out.min_ground_clearance, t.min_ground_clearance);
       ++out.steps;
     } else {
-      execute_configuration_path(sim, -1, {e.q_before, e.q_after}, options);
+      execute_configuration_path(sim, std::nullopt, {e.q_before, e.q_after}, options);
       out.planned_advance += (e.body_after - e.body_before).norm();
       ++out.shifts;
     }

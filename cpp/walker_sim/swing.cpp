@@ -77,15 +77,22 @@ double planned_clearance(const walker::WalkerModel& model, const Eigen::Isometry
 void ExecutionOptions::validate() const {
   require_in_range("ExecutionOptions", "joint_speed", joint_speed, 1e-6, 10.0);
   require_in_range("ExecutionOptions", "pause", pause, 0.0, 60.0);
-  require_in_range("ExecutionOptions", "frame_interval", frame_interval, 0.0, 60.0);
+  if (frame_interval) {
+    require_in_range("ExecutionOptions", "frame_interval", *frame_interval, 0.0, 60.0);
+    require_positive("ExecutionOptions", "frame_interval", *frame_interval);  // unset: no frames
+  }
 }
 
-ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::vector<Eigen::MatrixXd>& path,
+ExecutionTrace execute_configuration_path(WalkerSim& sim, std::optional<int> traced,
+                                          const std::vector<Eigen::MatrixXd>& path,
                                           const ExecutionOptions& options) {
   options.validate();
   const walker::WalkerModel& model = sim.model();
-  require(leg >= -1 && leg < model.legs(), "execute_configuration_path: leg = " + std::to_string(leg) +
-                                               " is outside [-1, " + std::to_string(model.legs() - 1) + "]");
+  require(!traced || (*traced >= 0 && *traced < model.legs()),
+          "execute_configuration_path: leg = " + std::to_string(traced.value_or(0)) +
+              " is outside the allowed range [0, " + std::to_string(model.legs() - 1) +
+              "] (None: no wheel traced)");
+  const int leg = traced.value_or(-1);  // < 0 below: no wheel traced
   require(path.size() >= 2, "execute_configuration_path: the path needs at least two waypoints");
   for (const auto& q : path) model.check_configuration(q);
   const auto t0 = std::chrono::steady_clock::now();
@@ -109,11 +116,11 @@ ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::ve
     for (int k = 0; k < model.legs(); ++k)
       out.min_any_rock_clearance = std::min(out.min_any_rock_clearance, k == leg ? rock.back() : sim.rock_clearance(k));
     if (leg >= 0) wheel.push_back(sim.wheel_centres().col(leg));
-    if (options.frame_interval > 0.0 && time.back() >= next_frame - 1e-9) {
+    if (options.frame_interval && time.back() >= next_frame - 1e-9) {
       frame_time.push_back(time.back());
       out.frame_body.push_back(sim.body_pose());
       out.frame_q.push_back(sim.joint_angles());
-      next_frame += options.frame_interval;
+      next_frame += *options.frame_interval;
     }
     if (in_air) out.min_ground_clearance = std::min(out.min_ground_clearance, ground.back());
   };

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <optional>
 #include <vector>
 
 #include "ernest/walker_sim/walker_sim.hpp"
@@ -29,9 +30,9 @@ double planned_clearance(const walker::WalkerModel& model, const Eigen::Isometry
 struct ExecutionOptions {
   double joint_speed = 0.5;   ///< fastest joint along each segment [rad/s], (0, 10]
   double pause = 0.6;         ///< hold at every waypoint (the robot settles) [s], [0, 60]
-  /// Record the whole robot (body pose, joint angles) every this many seconds for animations;
-  /// 0: never, [0, 60].
-  double frame_interval = 0.0;
+  /// Record the whole robot (body pose, joint angles) every this many seconds for animations,
+  /// (0, 60]; unset: never.
+  std::optional<double> frame_interval;
   void validate() const;
 };
 
@@ -67,8 +68,9 @@ ExecutionTrace execute_joint_path(WalkerSim& sim, int leg, const Eigen::Ref<cons
                                   const std::vector<Eigen::VectorXd>& path, const ExecutionOptions& options = {});
 
 /// The same for whole-robot configurations (joints × legs each): every leg moves at once (a body
-/// shift with all feet down); `leg` is the wheel whose clearances are traced (-1: none).
-ExecutionTrace execute_configuration_path(WalkerSim& sim, int leg, const std::vector<Eigen::MatrixXd>& path,
+/// shift with all feet down); `leg` is the wheel whose clearances are traced (unset: none).
+ExecutionTrace execute_configuration_path(WalkerSim& sim, std::optional<int> leg,
+                                          const std::vector<Eigen::MatrixXd>& path,
                                           const ExecutionOptions& options = {});
 
 }  // namespace ernest::walker_sim

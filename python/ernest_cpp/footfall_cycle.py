@@ -49,7 +49,7 @@ def rock_world(model, seed: int = 3, rocks: int = 60, spacing: float = 0.02):
 
 
 def cycle_options(cell: float = 0.02, seed: int = 3, sag_compensation: bool = True, dt: float | None = None,
-                  frame_interval: float = 0.0, stride: float = STRIDE,
+                  frame_interval: float | None = None, stride: float = STRIDE,
                   flat_tolerance: float | None = None) -> WS.FootfallCycleOptions:
     o = WS.FootfallCycleOptions()
     o.stride = stride
@@ -166,7 +166,7 @@ def animate(model, r: WS.FootfallCycleResult, rocks, path: Path, frames: int = 6
 
     t = np.asarray(r.frame_time)
     if t.size == 0:
-        raise ValueError("animate: the result has no frames (set execution.frame_interval > 0)")
+        raise ValueError("animate: the result has no frames (set execution.frame_interval)")
     pick = np.unique(np.linspace(0, t.size - 1, min(frames, t.size)).round().astype(int))
     bodies, qs = r.frame_body, r.frame_q
     fig, (top, side) = plt.subplots(1, 2, figsize=(10, 4.4), gridspec_kw={"width_ratios": [1.25, 1]})

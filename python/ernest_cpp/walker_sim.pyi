@@ -60,7 +60,7 @@ def planned_clearance(model: WalkerModel, body: npt.ArrayLike, leg: int, path: l
 class ExecutionOptions:
     joint_speed: float
     pause: float
-    frame_interval: float
+    frame_interval: float | None
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
@@ -101,7 +101,7 @@ class ExecutionTrace:
 def execute_joint_path(sim: WalkerSim, leg: int, stance: npt.ArrayLike, path: list[npt.ArrayLike],
                        options: ExecutionOptions = ...) -> ExecutionTrace: ...
 
-def execute_configuration_path(sim: WalkerSim, leg: int, path: list[npt.ArrayLike],
+def execute_configuration_path(sim: WalkerSim, leg: int | None, path: list[npt.ArrayLike],
                                options: ExecutionOptions = ...) -> ExecutionTrace: ...
 
 class GaitExecution:
@@ -203,7 +203,7 @@ class FootfallCycleOptions:
     settle_time: float
     torque_preference: float
     execute: bool
-    steps: int
+    steps: int | None
     step: StepOptions
     sim: WalkerSimOptions
     execution: ExecutionOptions

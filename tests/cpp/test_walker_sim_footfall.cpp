@@ -167,6 +167,9 @@ TEST(FootfallCycle, BadOptionsNameTheField) {
   o = FootfallCycleOptions{};
   o.steps = 7;  // more than the six legs
   EXPECT_NE(invalid_argument_message([&] { run_footfall_cycle(m, flat, {}, o); }).find("steps"), std::string::npos);
+  o.steps = 0;  // no 0 for "every leg": that is the unset field
+  EXPECT_NE(invalid_argument_message([&] { run_footfall_cycle(m, flat, {}, o); }).find("steps = 0"),
+            std::string::npos);
   o = FootfallCycleOptions{};
   o.execution.frame_interval = -1.0;
   EXPECT_NE(invalid_argument_message([&] { run_footfall_cycle(m, flat, {}, o); }).find("frame_interval"),
