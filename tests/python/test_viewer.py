@@ -123,6 +123,13 @@ def test_player_serves_and_scrubs(recording):
         assert time.perf_counter() - t0 < 5.0  # opening a recording
         assert player.frame == 0
         assert player.set_time(2.0) == 4
+        player.speed.value = 4.0
+        player.play.value = True  # plays on by itself: 4 s of episode a second
+        deadline = time.monotonic() + 10.0
+        while player.frame <= 6 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        player.play.value = False
+        assert player.frame > 6
         assert player.set_time(1e6) == len(player.recording) - 1
         assert player.slider.value == pytest.approx(player.recording.frames["time"][-1])
         for layer in ("terrain", "rover", "forces"):
