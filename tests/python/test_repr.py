@@ -103,3 +103,17 @@ def test_python_controllers_and_envs_print_their_settings():
     assert repr(E.ErnestEnv("bickler")) == "ErnestEnv('bickler', soil='dry_sand')"
     assert repr(E.ErnestEnv("slope", passive=True, episode_length=5.0)) == (
         "ErnestEnv('slope', soil='m90', passive=True, episode_length=5.0)")
+    from ernest_cpp.rl.toy_envs import PointMassEnv
+
+    assert repr(PointMassEnv(obs_dim=45, act_dim=3)) == "PointMassEnv(obs_dim=45, act_dim=3)"
+
+
+def test_the_sb3_vector_env_prints_its_id_and_size():
+    pytest.importorskip("stable_baselines3")
+    from ernest_cpp.envs.sb3 import ErnestSB3VecEnv
+
+    env = ErnestSB3VecEnv("ernest/Slope-v0", num_envs=2)
+    try:
+        assert repr(env) == "ErnestSB3VecEnv(env_id='ernest/Slope-v0', num_envs=2)"
+    finally:
+        env.close()

@@ -20,11 +20,15 @@ from __future__ import annotations
 import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
+from .._repr import arguments_repr, keeps_arguments
 from .core import check_reset_options
 from .vector import make_vec
 
 
 class ErnestSB3VecEnv(VecEnv):
+    __repr__ = arguments_repr
+
+    @keeps_arguments
     def __init__(self, env_id: str = "ernest/RockField-v0", num_envs: int = 4,
                  num_threads: int | None = None, **kwargs):
         self.venv = make_vec(env_id, num_envs, num_threads, **kwargs)

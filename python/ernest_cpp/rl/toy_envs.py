@@ -13,10 +13,15 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from .._repr import arguments_repr, keeps_arguments
+
 
 class PointMassEnv(gym.Env):
     metadata = {"render_modes": []}
 
+    __repr__ = arguments_repr
+
+    @keeps_arguments
     def __init__(self, obs_dim: int = 2, act_dim: int = 1, horizon: int = 10, step: float = 0.2):
         if obs_dim < 2 or act_dim < 1:
             raise ValueError(f"PointMass: obs_dim = {obs_dim} must be >= 2, act_dim = {act_dim} >= 1")
