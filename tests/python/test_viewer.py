@@ -134,6 +134,7 @@ def test_player_serves_and_scrubs(recording):
         assert player.slider.value == pytest.approx(player.recording.frames["time"][-1])
         for layer in ("terrain", "rover", "forces"):
             player.scene.checkboxes[layer].value = False
+            assert player.scene.layers[layer].visible is False
         with pytest.raises(ValueError, match="t = nan"):
             player.set_time(float("nan"))
     with pytest.raises(ValueError, match="port"):

@@ -37,7 +37,9 @@ def chassis_mask(img: np.ndarray) -> np.ndarray:
     """Pixels of the chassis' orange (shaded by the lights): red high, green and blue well below."""
     r, g, b = (img[..., k].astype(int) for k in range(3))
     ref = np.array(CHASSIS_RGB)
-    return (r > 120) & (r - g > 60) & (r - b > 90) & (g > b - 10) & (ref[0] > ref[1])
+    mask = (r > 120) & (r - g > 60) & (r - b > 90) & (g > b - 10) & (ref[0] > ref[1])
+    mask[-80:, :80] = False  # the axes gizmo in the bottom-left corner has a red axis
+    return mask
 
 
 def terrain_mask(img: np.ndarray) -> np.ndarray:
@@ -134,3 +136,26 @@ def test_time_slider_moves_the_rover(viewer):
     expect = expected_pixel(player, last, img.shape[:2])
     assert np.linalg.norm(end - start) > 40, (start, end)
     assert np.linalg.norm(end - expect) < 60, (end, expect)
+
+
+def test_rover_layer_switches_off_and_on(viewer):
+    from selenium.webdriver.common.by import By
+
+    player, driver, _ = viewer
+    player.scene.checkboxes["forces"].value = False  # the load arrows turn red under load
+    # the check box whose row is labelled "rover" (the panel has hidden settings boxes too)
+    rover = next(b for b in driver.find_elements(By.CSS_SELECTOR, "input[type=checkbox]")
+                 if b.is_displayed() and driver.execute_script(
+                     "let e = arguments[0]; while (e && !e.innerText) e = e.parentElement;"
+                     "return e ? e.innerText.trim() : '';", b) == "rover")
+    for on in (False, True):
+        driver.execute_script("arguments[0].click();", rover)
+        deadline = time.monotonic() + 10
+        while player.scene.layers["rover"].visible is not on and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert player.scene.layers["rover"].visible is on
+        time.sleep(1.0)  # the browser redraws
+        img = browser.wait_for_scene(driver, timeout=60)
+        drawn = chassis_mask(img[:, :PANEL_X]).sum()
+        assert (drawn > 40) if on else (drawn < 5), (on, drawn)
+    player.scene.checkboxes["forces"].value = True
