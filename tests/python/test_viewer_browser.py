@@ -2,7 +2,7 @@
 installed by ./run test) opens a recorded RockField episode, waits for the scene and looks at the
 pixels with the viewer's fixed camera: terrain colours fill the ground, the rover's orange chassis
 is drawn where the camera projects the rover; pressing End on the time slider moves the rover to
-its last recorded place on screen.
+its last recorded place on screen; the rover layer's check box hides and shows it.
 
 With ERNEST_VIEWER_PICTURES=FOLDER the screenshots are also saved there (the README's pictures:
 docs/pictures)."""
