@@ -4,6 +4,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <optional>
 
 #include "bindings.hpp"
@@ -60,7 +61,12 @@ void bind_dynamics(py::module_& m) {
         [](const MotorParameters& mp, double output_torque, double output_speed) {
           ernest::require_finite("motor_electrical", "output_torque", output_torque);
           ernest::require_finite("motor_electrical", "output_speed", output_speed);
-          return motor_electrical(mp, output_torque, output_speed);
+          const MotorElectrical e = motor_electrical(mp, output_torque, output_speed);
+          if (!std::isfinite(e.current) || !std::isfinite(e.power))  // e.g. 1e300 N m
+            throw std::invalid_argument("motor_electrical: output_torque = " + std::to_string(output_torque) +
+                                        " and output_speed = " + std::to_string(output_speed) +
+                                        " overflow the current or power");
+          return e;
         },
         "m"_a, "output_torque"_a, "output_speed"_a,
         "Current and electrical power P = I (R I + K_tau omega) (eq 40) for an output torque "

@@ -106,11 +106,14 @@ void bind_footfall(py::module_& m) {
       .def_readonly("status", &CellEvaluation::status)
       .def_readonly("margin", &CellEvaluation::margin)
       .def_readonly("q", &CellEvaluation::q)
-      .def_readonly("q_above", &CellEvaluation::q_above)
+      .def_readonly("q_above", &CellEvaluation::q_above,
+                    "at the compliance waypoint above the point; NaN when it was not reached")
       .def_readonly("cg", &CellEvaluation::cg)
-      .def_readonly("saturation_down", &CellEvaluation::saturation_down, "peak |tau| / limit after the step")
+      .def_readonly("saturation_down", &CellEvaluation::saturation_down,
+                    "peak |tau| / limit after the step (NaN when torques are off or unreachable)")
       .def_readonly("saturation_lifted", &CellEvaluation::saturation_lifted,
-                    "peak |tau| / limit with the leg at q_above")
+                    "peak |tau| / limit with the leg at q_above (NaN when torques are off or "
+                    "unreachable)")
       .def_readonly("saturation", &CellEvaluation::saturation, "the larger (NaN when torques are off)")
       .def_readonly("peak_leg", &CellEvaluation::peak_leg)
       .def_readonly("peak_joint", &CellEvaluation::peak_joint);

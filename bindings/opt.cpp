@@ -176,11 +176,16 @@ void bind_opt(py::module_& m) {
            [](const AsterixKinematics& k, double psi, double theta, double theta_rate) {
              double dx, dy, dpsi;
              k.pose_rate(psi, theta, theta_rate, dx, dy, dpsi);
+             if (!std::isfinite(dx) || !std::isfinite(dy) || !std::isfinite(dpsi))  // NaN in or overflow
+               throw std::invalid_argument("AsterixKinematics.pose_rate: psi, theta, theta_rate = " +
+                                           std::to_string(psi) + ", " + std::to_string(theta) + ", " +
+                                           std::to_string(theta_rate) + " give a rate that is not finite");
              return py::make_tuple(dx, dy, dpsi);
            },
            "psi"_a, "theta"_a, "theta_rate"_a, "(dx/dt, dy/dt, dpsi/dt) of the wheel centroid.")
       .def("turning_radius", &AsterixKinematics::turning_radius, "theta"_a,
-           "Radius of the centroid's circle at constant steering [m].")
+           "Radius of the centroid's circle at constant steering [m]; inf at theta = 0 (a straight "
+           "line).")
       .def("integrate",
            [](const AsterixKinematics& k, py::function steering, double t0, double t1,
               const Pose2& start, const IntegrationOptions& options) {

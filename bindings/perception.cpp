@@ -201,7 +201,8 @@ void bind_perception(py::module_& m) {
            py::call_guard<py::gil_scoped_release>(),
            "Fuse world points [n, 3] with height variances [n] (one measurement per cell per call).")
       .def("measurement_variance", &ElevationMap::measurement_variance, "p_cam"_a,
-           "camera_rotation"_a, "camera"_a, "Height variance of a camera-frame point [m^2].")
+           "camera_rotation"_a, "camera"_a,
+           "Height variance of a camera-frame point [m^2] (p_cam.z > 0: in front of the camera).")
       .def(
           "height",
           [](const ElevationMap& map, double x, double y) {

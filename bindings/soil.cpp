@@ -3,6 +3,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
 #include "bindings.hpp"
 #include "interrupt.hpp"
 #include "ernest/common/validation.hpp"
@@ -89,7 +93,6 @@ void bind_soil(py::module_& m) {
 
   py::class_<BekkerWongModel>(m, "BekkerWongModel",
                               "Bekker–Wong wheel–soil model with the DARTS changes (eqs 12–32).")
-               interruptible scope;  // Ctrl-C every few thousand rows
       .def(py::init<const SoilParameters&, const WheelGeometry&, int>(), "soil"_a,
            "wheel"_a = WheelGeometry{}, "points_per_panel"_a = BekkerWongModel::kDefaultPointsPerPanel)
       .def("evaluate", &BekkerWongModel::evaluate, "state"_a,
@@ -100,6 +103,7 @@ void bind_soil(py::module_& m) {
              Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> forces(states.rows(), 4);
              {
                py::gil_scoped_release release;
+               interruptible scope;  // Ctrl-C every few thousand rows
                self.evaluate_batch(states, forces);
              }
              return forces;
@@ -155,8 +159,23 @@ void bind_soil(py::module_& m) {
       .def_readonly("iterations", &RigResult::iterations)
       .def_readonly("converged", &RigResult::converged);
 
-  m.def("rig_state", &rig_state, "sinkage"_a, "slip"_a, "carriage_speed"_a, "wheel_radius"_a,
-        "Contact state of a rig wheel at sinkage h and kinematic slip s.");
+  m.def("rig_state",
+        [](double sinkage, double slip, double carriage_speed, double wheel_radius) {
+          // Checked here, not in rig_state itself: the equilibrium solver calls it per evaluation.
+          ernest::require_finite("rig_state", "sinkage", sinkage);
+          ernest::require_finite("rig_state", "carriage_speed", carriage_speed);
+          ernest::require_finite("rig_state", "wheel_radius", wheel_radius);
+          if (!(slip >= -1.0 && slip < 1.0))  // slip 1: the wheel would spin infinitely fast
+            throw std::invalid_argument("rig_state.slip = " + std::to_string(slip) +
+                                        " is outside the allowed range [-1, 1)");
+          const ContactState st = rig_state(sinkage, slip, carriage_speed, wheel_radius);
+          if (!std::isfinite(st.vcx))
+            throw std::invalid_argument("rig_state: carriage_speed / (1 - slip) overflows (carriage_speed = " +
+                                        std::to_string(carriage_speed) + ", slip = " + std::to_string(slip) + ")");
+          return st;
+        },
+        "sinkage"_a, "slip"_a, "carriage_speed"_a, "wheel_radius"_a,
+        "Contact state of a rig wheel at sinkage h and kinematic slip s in [-1, 1).");
   m.def("solve_equilibrium", &solve_equilibrium, "model"_a, "load"_a, "slip"_a,
         "options"_a = RigOptions{}, "Equilibrium sinkage (F_z = load) at one slip.");
   m.def("slip_sweep",

@@ -83,7 +83,7 @@ void bind_walker_sim(py::module_& m) {
       .def("wheel_centres", guarded("WalkerSim.wheel_centres", &WalkerSim::wheel_centres), "3 × legs [m].")
       .def("wheel_axles", guarded("WalkerSim.wheel_axles", &WalkerSim::wheel_axles), "3 × legs.")
       .def("wheel_loads", guarded("WalkerSim.wheel_loads", &WalkerSim::wheel_loads), "Normal force of each wheel's spring [N].")
-      .def("rock_clearance", guarded("WalkerSim.rock_clearance", &WalkerSim::rock_clearance), "leg"_a, "Wheel to nearest rock [m] (< 0 overlap).")
+      .def("rock_clearance", guarded("WalkerSim.rock_clearance", &WalkerSim::rock_clearance), "leg"_a, "Wheel to nearest rock [m] (< 0 overlap; inf without rocks).")
       .def("ground_clearance", guarded("WalkerSim.ground_clearance", &WalkerSim::ground_clearance), "leg"_a, "Wheel's lowest point over z = 0 [m].");
 
   m.def("wheel_rock_clearance", &wheel_rock_clearance, "centre"_a, "axle"_a, "radius"_a, "width"_a, "rock"_a,

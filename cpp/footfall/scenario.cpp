@@ -58,7 +58,8 @@ dynamics::HeightMap rock_field(const RockFieldOptions& o, const Eigen::Ref<const
 
 Eigen::MatrixXd sample_waypoints(StabilityMapper& mapper, const StabilityMap& map, LegCollisionChecker& checker,
                                  int count, std::uint32_t seed) {
-  require(count >= 1, "sample_waypoints: count must be >= 1");
+  // (the attempts, 50 per waypoint, stay within an int)
+  require_in_range("sample_waypoints", "count", count, 1, 1e6);
   std::vector<std::array<int, 2>> stable;
   for (Eigen::Index i = 0; i < map.status.rows(); ++i)
     for (Eigen::Index j = 0; j < map.status.cols(); ++j)

@@ -104,7 +104,8 @@ CellEvaluation StabilityMapper::evaluate(double x, double y, const Eigen::Ref<co
   const int n = model_.joints_per_leg();
   CellEvaluation e;
   e.q.resize(n);
-  e.q_above.resize(n);
+  // NaN until the waypoint is reached (Eigen's resize leaves the memory uninitialised)
+  e.q_above.setConstant(n, std::numeric_limits<double>::quiet_NaN());
   const Eigen::Vector3d c(x, y, terrain_.height(x, y));
   if (!solve(target(c, 0.0), seed, e.q)) return e;
   e.ground_reachable = true;

@@ -55,7 +55,7 @@ struct CellEvaluation {
   bool ground_reachable = false;  ///< IK on the ground point (the waypoint may still fail)
   double margin = 0.0;          ///< SSM or NESM of the CPS [m] (0 when unreachable)
   Eigen::VectorXd q;            ///< the leg's joint angles on the ground point
-  Eigen::VectorXd q_above;      ///< at the compliance waypoint above it
+  Eigen::VectorXd q_above;      ///< at the compliance waypoint above it (NaN when not reached)
   Eigen::Vector3d cg = Eigen::Vector3d::Zero();  ///< new centre of gravity (world)
   /// Peak |tau| / limit (NaN unless torques are evaluated and the cell is reachable): after the
   /// step (every foot down), during it (the leg at q_above, five feet carrying), the larger.

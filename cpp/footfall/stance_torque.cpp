@@ -111,8 +111,8 @@ TorquePeak StanceTorques::lifted_segment(const Eigen::Ref<const Eigen::VectorXd>
 }
 
 TorquePeak StanceTorques::lifted_path(const Eigen::Ref<const Eigen::MatrixXd>& path, double resolution) {
-  require(path.rows() == model_.joints_per_leg() && path.cols() >= 1,
-          "StanceTorques.lifted_path: path must be joints x waypoints (at least one)");
+  require(path.rows() == model_.joints_per_leg() && path.cols() >= 1 && path.allFinite(),
+          "StanceTorques.lifted_path: path must be finite, joints x waypoints (at least one)");
   if (path.cols() == 1) return lifted(path.col(0));
   TorquePeak peak;
   peak.saturation = -1.0;

@@ -109,7 +109,8 @@ class AsterixKinematics {
   void pose_rate(double psi, double theta, double theta_rate, double& dx, double& dy,
                  double& dpsi) const;
   /// Radius of the circle traced by the reference point at constant steering theta != 0:
-  /// l_x cos(theta/2) / tan(|theta|/2) (axle centres: l_x / tan(|theta|/2)).
+  /// l_x cos(theta/2) / tan(|theta|/2) (axle centres: l_x / tan(|theta|/2)); inf at theta = 0 (a
+  /// straight line).
   double turning_radius(double theta) const;
 
   /// Pose at t1 from `start` at t0, integrating the averaged eqs 20–23 with an adaptive

@@ -153,6 +153,10 @@ double transition_cost(const TransitionProblem& problem, Strategy strategy,
   require(static_cast<int>(x.size()) == dim, "transition_cost: x has the wrong size");
   for (std::size_t i = 0; i < x.size(); ++i)
     require_finite("transition_cost", ("x[" + std::to_string(i) + "]").c_str(), x[i]);
+  // x[0] is the duration T [s]: the solver keeps it within these bounds; T = 0 would give an
+  // infinite cost (1 / T^4) and a negative T an integration backwards in time.
+  require_in_range("transition_cost", "x[0] (the duration [s], options.min_duration..max_duration)", x[0],
+                   options.min_duration, options.max_duration);
   TransitionCost cost(problem, strategy, weights, options,
                       strategy == Strategy::Bezier ? 2 : options.waypoints);
   if (grad) grad->assign(dim, 0.0);
@@ -168,6 +172,10 @@ void transition_constraints(const TransitionProblem& problem, Strategy strategy,
   require(static_cast<int>(x.size()) == dim, "transition_constraints: x has the wrong size");
   for (std::size_t i = 0; i < x.size(); ++i)
     require_finite("transition_constraints", ("x[" + std::to_string(i) + "]").c_str(), x[i]);
+  // x[0] is the duration T [s]: the solver keeps it within these bounds; T = 0 would give an
+  // infinite cost (1 / T^4) and a negative T an integration backwards in time.
+  require_in_range("transition_constraints", "x[0] (the duration [s], options.min_duration..max_duration)", x[0],
+                   options.min_duration, options.max_duration);
   TransitionCost cost(problem, strategy, CostWeights{}, options,
                       strategy == Strategy::Bezier ? 2 : options.waypoints);
   values.assign(cost.constraint_count(), 0.0);

@@ -89,7 +89,14 @@ double ElevationMap::measurement_variance(const Eigen::Vector3d& p_cam,
   // Triangulation: Z = f B / d, so sigma_Z = Z^2 / (f B) sigma_d; the point moves along its ray,
   // d p / d Z = p / Z, whose world-vertical component maps sigma_Z to the height ([17] eq. for
   // the measurement variance: J_S Sigma_S J_S^T, keeping the z row).
+  camera.validate();
+  require(p_cam.allFinite() && camera_rotation.allFinite(),
+          "ElevationMap.measurement_variance: p_cam and camera_rotation must be finite");
   const double z = p_cam.z();
+  // fuse_cloud skips such points (behind_camera): a point on or behind the image plane has no
+  // disparity
+  require(z > 0.0, "ElevationMap.measurement_variance: p_cam.z = " + std::to_string(z) +
+                       " must be > 0 (a point in front of the camera)");
   const double sigma_z = z * z / (camera.focal() * camera.baseline) * options_.disparity_sigma;
   const double jz = camera_rotation.row(2).dot(p_cam) / z;
   return jz * jz * sigma_z * sigma_z + options_.pose_variance;

@@ -33,7 +33,7 @@ bool StereoMapper::update(double time, const Eigen::Vector3d& chassis_position,
                           const Eigen::Matrix3d& chassis_rotation) {
   require_finite("StereoMapper.update", "time", time);
   require(chassis_position.allFinite() && chassis_rotation.allFinite(),
-          "StereoMapper.update: the chassis pose is not finite");
+          "StereoMapper.update: chassis_position and chassis_rotation must be finite");
   map_.move_to(chassis_position.x(), chassis_position.y());
   // a small tolerance so that time steps summing to 1 / rate in floating point still trigger
   if (frames_ > 0 && time - last_fusion_ < 1.0 / options_.fusion_rate - 1e-9) return false;
@@ -44,6 +44,8 @@ bool StereoMapper::update(double time, const Eigen::Vector3d& chassis_position,
 
 const StereoFrame& StereoMapper::capture(const Eigen::Vector3d& chassis_position,
                                          const Eigen::Matrix3d& chassis_rotation) {
+  require(chassis_position.allFinite() && chassis_rotation.allFinite(),
+          "StereoMapper.capture: chassis_position and chassis_rotation must be finite");
   const auto& cam = options_.camera;
   map_.move_to(chassis_position.x(), chassis_position.y());
   frame_.left_pose = cam.camera_pose(chassis_position, chassis_rotation, 0);

@@ -77,10 +77,10 @@ FloatImage StereoMatcher::compute(const GrayImage& left, const GrayImage& right)
   const cv::Mat l(h, w, CV_8UC1, const_cast<std::uint8_t*>(left.data()));
   const cv::Mat r(h, w, CV_8UC1, const_cast<std::uint8_t*>(right.data()));
   cv::Mat disp16;
-  impl_->matcher->compute(l, r, disp16);
   // Ctrl-C (common/interrupt.hpp) before and between the OpenCV passes and between output rows:
   // a pass itself is one OpenCV call (its time grows with width x height x num_disparities).
   poll_interrupt();
+  impl_->matcher->compute(l, r, disp16);
   // Right-image disparity for the left-right check: match the mirrored pair with the roles
   // swapped (a right pixel u_R = u_L - d is, mirrored, the left pixel of a pair with disparity d).
   const bool lr_check =
@@ -90,8 +90,8 @@ FloatImage StereoMatcher::compute(const GrayImage& left, const GrayImage& right)
     cv::Mat lf, rf, d;
     cv::flip(l, lf, 1);
     cv::flip(r, rf, 1);
-    impl_->matcher->compute(rf, lf, d);
     poll_interrupt();
+    impl_->matcher->compute(rf, lf, d);
     cv::flip(d, right16, 1);
   }
   FloatImage out(h, w);
@@ -99,8 +99,8 @@ FloatImage StereoMatcher::compute(const GrayImage& left, const GrayImage& right)
   const int min_valid = 16 * impl_->matcher->getMinDisparity();  // invalid = (min - 1) * 16
   const int tol16 = 16 * options_.max_lr_difference.value_or(0);
   for (int v = 0; v < h; ++v) {
-    const auto* row = disp16.ptr<std::int16_t>(v);
     poll_interrupt();
+    const auto* row = disp16.ptr<std::int16_t>(v);
     const auto* rrow = lr_check ? right16.ptr<std::int16_t>(v) : nullptr;
     for (int u = 0; u < w; ++u) {
       bool ok = row[u] >= min_valid;

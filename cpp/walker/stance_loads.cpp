@@ -71,7 +71,9 @@ Eigen::MatrixXd lift_legs(const WalkerModel& model, const Eigen::Isometry3d& bod
   LegIk ik(model);
   const Eigen::Vector3d up = body.linear().transpose() * Eigen::Vector3d::UnitZ();
   for (int leg : legs) {
-    model.check_leg(leg);
+    require(leg >= 0 && leg < model.params().legs,
+            "lift_legs: legs holds " + std::to_string(leg) + ", outside [0, " +
+                std::to_string(model.params().legs - 1) + "]");
     const Eigen::Isometry3d foot = model.foot_pose(leg, q.col(leg));
     Eigen::Isometry3d target = foot;
     target.translation() += height * up;

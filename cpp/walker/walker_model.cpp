@@ -262,12 +262,13 @@ void WalkerModel::check_q(const Eigen::Ref<const Eigen::VectorXd>& q, const char
   for (int i = 0; i < n_; ++i) require_finite(field, p_.joints[i].name.c_str(), q[i]);
 }
 
-void WalkerModel::check_configuration(const Eigen::Ref<const Eigen::MatrixXd>& q) const {
+void WalkerModel::check_configuration(const Eigen::Ref<const Eigen::MatrixXd>& q,
+                                      const char* field) const {
   require(q.rows() == n_ && q.cols() == p_.legs,
-          "q has shape (" + std::to_string(q.rows()) + ", " + std::to_string(q.cols()) +
-              "), expected (joints per leg, legs) = (" + std::to_string(n_) + ", " +
-              std::to_string(p_.legs) + ")");
-  require(q.allFinite(), "q contains a value that is not finite");
+          std::string(field) + " has shape (" + std::to_string(q.rows()) + ", " +
+              std::to_string(q.cols()) + "), expected (joints per leg, legs) = (" +
+              std::to_string(n_) + ", " + std::to_string(p_.legs) + ")");
+  require(q.allFinite(), std::string(field) + " contains a value that is not finite");
 }
 
 bool WalkerModel::within_limits(const Eigen::Ref<const Eigen::VectorXd>& q, double tolerance) const {

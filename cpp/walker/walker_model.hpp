@@ -106,7 +106,7 @@ class WalkerModel {
   /// Input checks for run-time arguments (std::invalid_argument naming the field).
   void check_leg(int leg) const;
   void check_q(const Eigen::Ref<const Eigen::VectorXd>& q, const char* field = "q") const;
-  void check_configuration(const Eigen::Ref<const Eigen::MatrixXd>& q) const;
+  void check_configuration(const Eigen::Ref<const Eigen::MatrixXd>& q, const char* field = "q") const;
   /// True when every joint is within its limits (with a tolerance in rad).
   bool within_limits(const Eigen::Ref<const Eigen::VectorXd>& q, double tolerance = 1e-9) const;
 

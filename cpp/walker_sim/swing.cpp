@@ -94,7 +94,7 @@ ExecutionTrace execute_configuration_path(WalkerSim& sim, std::optional<int> tra
               "] (None: no wheel traced)");
   const int leg = traced.value_or(-1);  // < 0 below: no wheel traced
   require(path.size() >= 2, "execute_configuration_path: the path needs at least two waypoints");
-  for (const auto& q : path) model.check_configuration(q);
+  for (const auto& q : path) model.check_configuration(q, "execute_configuration_path: a path waypoint");
   const auto t0 = std::chrono::steady_clock::now();
   const double dt = sim.options().dt, start = sim.time();
   const int last = static_cast<int>(path.size()) - 1;
@@ -165,7 +165,7 @@ ExecutionTrace execute_joint_path(WalkerSim& sim, int leg, const Eigen::Ref<cons
                                   const std::vector<Eigen::VectorXd>& path, const ExecutionOptions& options) {
   const walker::WalkerModel& model = sim.model();
   model.check_leg(leg);
-  model.check_configuration(stance);
+  model.check_configuration(stance, "execute_joint_path: stance");
   std::vector<Eigen::MatrixXd> configs;
   for (const auto& q : path) {
     model.check_q(q, "path");

@@ -309,7 +309,7 @@ double WalkerSim::time() const { return impl_->t; }
 
 void WalkerSim::step(const Eigen::Ref<const Eigen::MatrixXd>& q_target,
                      const Eigen::Ref<const Eigen::MatrixXd>& rate) {
-  impl_->model.check_configuration(q_target);
+  impl_->model.check_configuration(q_target, "WalkerSim.step: q_target");
   require(rate.size() == 0 || (rate.rows() == q_target.rows() && rate.cols() == q_target.cols() &&
                                rate.allFinite()),
           "WalkerSim.step: rate must be empty or finite with the shape of q_target");
@@ -319,7 +319,7 @@ void WalkerSim::step(const Eigen::Ref<const Eigen::MatrixXd>& q_target,
 
 void WalkerSim::hold(const Eigen::Ref<const Eigen::MatrixXd>& q_target, double seconds) {
   require_in_range("WalkerSim.hold", "seconds", seconds, 0.0, 1e4);
-  impl_->model.check_configuration(q_target);
+  impl_->model.check_configuration(q_target, "WalkerSim.hold: q_target");
   const Eigen::MatrixXd none;
   for (int s = 0, steps = static_cast<int>(std::ceil(seconds / impl_->o.dt - 1e-9)); s < steps; ++s) {
     poll_interrupt();  // Ctrl-C between whole physics steps (common/interrupt.hpp)
