@@ -80,6 +80,15 @@ def test_version(capsys):
     assert capsys.readouterr().out == f"ernest {ernest_cpp.__version__}\n"
 
 
+def test_version_of_the_installed_command_is_the_package_version():
+    from importlib.metadata import version
+    exe = os.path.join(os.path.dirname(sys.executable), "ernest")
+    r = subprocess.run([exe, "--version"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout == f"ernest {version('ernest-cpp')}\n"
+    assert ernest_cpp.__version__ == version("ernest-cpp")
+
+
 def test_help_is_plain_text(capsys):
     parser, sub = cli.build_parser()
     texts = [parser.format_help()] + [p.format_help() for p in sub.choices.values()]
