@@ -483,9 +483,20 @@ void bind_dynamics(py::module_& m) {
       .def_readonly("residual", &WheelSyncResult::residual, "||A x - y||")
       .def_readonly("A", &WheelSyncResult::A, "eq 6")
       .def_readonly("y", &WheelSyncResult::y, "eq 8");
-  m.def("wheel_jacobian", &wheel_jacobian, "p"_a, "psi"_a, "phi"_a, "wheel"_a,
+  m.def("wheel_jacobian",
+        [](const RoverParameters& p, double psi, double phi, int wheel) {
+          p.validate();  // e.g. wheel_radius 0 would give NaN
+          return wheel_jacobian(p, psi, phi, wheel);
+        },
+        "p"_a, "psi"_a, "phi"_a, "wheel"_a,
         "3 x 8 Jacobian J_i of eqs 1–2 (wheel frame; q_dot of eq 3).");
-  m.def("synchronise_wheels", &synchronise_wheels, "p"_a, "psi"_a, "phi"_a, "vx"_a, "wx"_a,
+  m.def("synchronise_wheels",
+        [](const RoverParameters& p, double psi, double phi, double vx, double wx, double wy,
+           double psi_dot, double phi_dot) {
+          p.validate();  // wheel_radius 0 gave NaN wheel speeds
+          return synchronise_wheels(p, psi, phi, vx, wx, wy, psi_dot, phi_dot);
+        },
+        "p"_a, "psi"_a, "phi"_a, "vx"_a, "wx"_a,
         "wy"_a, "psi_dot"_a, "phi_dot"_a,
         "Wheel synchroniser of §2.3: wheel speeds (eq 10) from (Vx, wx, wy, psi_dot, phi_dot) "
         "at gimbal angles (psi, phi), with x = A^+ y (eq 9).");

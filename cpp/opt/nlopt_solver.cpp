@@ -119,6 +119,13 @@ SolverResult minimize_slsqp(const OptimizationProblem& problem, std::vector<doub
           "minimize_slsqp: upper bounds must be empty or have `dimension` entries");
   for (int i = 0; i < n; ++i) {
     require_finite("minimize_slsqp", "x0", x0[i]);
+    const double lo = problem.lower.empty() ? -kInf : problem.lower[i];
+    const double hi = problem.upper.empty() ? kInf : problem.upper[i];
+    if (!(lo <= hi)) {  // NaN too; NLopt would say only "bounds i fail"
+      throw std::invalid_argument("minimize_slsqp: lower[" + std::to_string(i) + "] = " +
+                                  std::to_string(lo) + " must be <= upper[" + std::to_string(i) +
+                                  "] = " + std::to_string(hi) + " (neither NaN)");
+    }
     // NLopt requires a start inside the bounds.
     if (!problem.lower.empty()) x0[i] = std::max(x0[i], problem.lower[i]);
     if (!problem.upper.empty()) x0[i] = std::min(x0[i], problem.upper[i]);

@@ -99,7 +99,12 @@ double ElevationMap::measurement_variance(const Eigen::Vector3d& p_cam,
                        " must be > 0 (a point in front of the camera)");
   const double sigma_z = z * z / (camera.focal() * camera.baseline) * options_.disparity_sigma;
   const double jz = camera_rotation.row(2).dot(p_cam) / z;
-  return jz * jz * sigma_z * sigma_z + options_.pose_variance;
+  const double variance = jz * jz * sigma_z * sigma_z + options_.pose_variance;
+  require(std::isfinite(variance),  // a point at 1e-300 m or 1e308 m: overflow
+          "ElevationMap.measurement_variance: p_cam = (" + std::to_string(p_cam.x()) + ", " +
+              std::to_string(p_cam.y()) + ", " + std::to_string(p_cam.z()) +
+              ") gives a variance that is not finite");
+  return variance;
 }
 
 FuseStats ElevationMap::fuse_cloud(const Eigen::Ref<const Points>& points,

@@ -97,7 +97,7 @@ def campaign(examples: int, seeds: list[int], timeout: float, jobs: int) -> dict
 
 
 def test_fuzz_every_module_with_a_fixed_seed():
-    examples = int(os.environ.get("ERNEST_FUZZ_EXAMPLES", "8"))
+    examples = int(os.environ.get("ERNEST_FUZZ_EXAMPLES", "20"))
     seeds = _seeds(os.environ.get("ERNEST_FUZZ_SEEDS", "0"))
     start = time.monotonic()
     t = campaign(examples, seeds, float(os.environ.get("ERNEST_FUZZ_TIMEOUT", "600")),
@@ -105,7 +105,7 @@ def test_fuzz_every_module_with_a_fixed_seed():
     summary = {k: t[k] for k in COUNTS + ("max_interrupt_delay",)}
     summary["wall_s"] = round(time.monotonic() - start, 1)
     print("fuzz:", json.dumps(summary), "skipped:", t["samples"].get("skipped"))
-    assert t["inputs"] > 2000, summary
+    assert t["inputs"] > 5000, summary
     assert t["crashes"] == 0 and t["hangs"] == 0, t["samples"]
     assert t["nonfinite"] == 0, t["samples"].get("nonfinite")
     assert t["unclear"] == 0, t["samples"].get("unclear")

@@ -158,3 +158,27 @@ def test_execute_joint_path_names_the_stance(walker):
     bad[2, 3] = math.nan
     with pytest.raises(ValueError, match="execute_joint_path: stance contains a value that is not"):
         WS.execute_joint_path(sim, 0, bad, [q[:, 0], q[:, 0]])
+
+
+def test_synchronise_wheels_and_wheel_jacobian_validate_the_parameters():
+    p = D.RoverParameters()
+    p.wheel_radius = 0.0  # gave NaN wheel speeds
+    with pytest.raises(ValueError, match="wheel_radius"):
+        D.synchronise_wheels(p, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="wheel_radius"):
+        D.wheel_jacobian(p, 0.0, 0.0, 0)
+
+
+def test_minimize_slsqp_names_crossed_bounds():
+    with pytest.raises(ValueError, match=r"minimize_slsqp: lower\[1\] = 9\.81.* must be <= "
+                                         r"upper\[1\] = -3\.5"):  # was NLopt's "bounds 1 fail"
+        O.minimize_slsqp(lambda x: (float(np.sum(x ** 2)), 2 * np.asarray(x)), [0.0, 0.0],
+                         [0.0, 9.81], [1.0, -3.5])
+
+
+def test_measurement_variance_refuses_an_overflowing_point():
+    m = P.ElevationMap()
+    with pytest.raises(ValueError, match="measurement_variance: p_cam = .* not finite"):
+        # a camera whose z row looks along x: jz = 3.6 / 1e-300 overflows (was NaN)
+        m.measurement_variance(np.array([3.6, 0.0, 1e-300]), np.array([[0.0, 1.0, 0.0],
+                               [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]), P.StereoCameraParameters())
